@@ -1,0 +1,107 @@
+"""Reading quantities with units (pint) from configuration text.
+
+Quantities are written as text, for example ``"17.5 mm"`` or ``"24.7 GN*s/m^2.5"``,
+and converted to SI floats inside camdyn. Cam speeds need care: pint treats the
+radian as dimensionless, so ``"11.55 Hz"`` would silently become 11.55 rad/s.
+:func:`parse_speed` therefore reads speeds itself: Hz and 1/s mean revolutions
+per second, rpm means revolutions per minute, rad/s means radians per second.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import pint
+
+from camdyn.errors import UnitError
+
+__all__ = ["registry", "parse_quantity", "parse_speed", "format_quantity"]
+
+
+@lru_cache(maxsize=1)
+def registry() -> pint.UnitRegistry:
+    """The shared pint unit registry."""
+    reg = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
+    return reg
+
+
+def _quantity(text, key: str):
+    reg = registry()
+    if isinstance(text, bool):
+        raise UnitError(f"{key}: expected a number with a unit, got {text!r}")
+    if isinstance(text, (int, float)):
+        return reg.Quantity(float(text), "")
+    if not isinstance(text, str) or not text.strip():
+        raise UnitError(f"{key}: expected a quantity such as '17.5 mm', got {text!r}")
+    cleaned = text.strip().replace("·", "*").replace("^", "**").replace("µ", "u")
+    try:
+        q = reg.Quantity(cleaned)
+    except Exception as exc:  # pint raises several unrelated types here
+        raise UnitError(f"{key}: cannot read the quantity {text!r} ({exc.__class__.__name__})") from None
+    if not isinstance(q, reg.Quantity):  # a bare number parses to a float
+        q = reg.Quantity(float(q), "")
+    return q
+
+
+def parse_quantity(text, unit: str, key: str = "value") -> float:
+    """Read ``text`` as a quantity and return its magnitude in ``unit``.
+
+    Parameters
+    ----------
+    text : str or float
+        For example ``"17.5 mm"``. A bare number is accepted only when ``unit`` is
+        dimensionless, or is taken to be in ``unit`` already when it is a float
+        given programmatically.
+    unit : str
+        Target unit understood by pint, for example ``"m"`` or ``"N*s/m**2.5"``.
+    key : str
+        Parameter name used in error messages.
+
+    Returns
+    -------
+    float
+        Magnitude in ``unit``.
+    """
+    reg = registry()
+    target = reg.Unit(unit) if unit else reg.Unit("")
+    q = _quantity(text, key)
+    if q.unitless and not target.dimensionless:
+        if isinstance(text, (int, float)):
+            return float(text)
+        raise UnitError(f"{key}: {text!r} has no unit; write it with one, e.g. '{text} {unit}'")
+    try:
+        value = q.to(target).magnitude
+    except pint.DimensionalityError:
+        raise UnitError(
+            f"{key}: {text!r} is not convertible to {unit} "
+            f"(it has dimension {q.dimensionality}, expected {target.dimensionality})"
+        ) from None
+    return float(value)
+
+
+def parse_speed(text, key: str = "speed") -> float:
+    """Read a cam speed and return it in revolutions per second [Hz].
+
+    ``"11.55Hz"``, ``"693 rpm"``, ``"72.6 rad/s"`` and ``"11.55 1/s"`` are understood.
+    A bare number is taken as Hz.
+    """
+    if isinstance(text, (int, float)) and not isinstance(text, bool):
+        return float(text)
+    q = _quantity(text, key)
+    reg = registry()
+    if q.unitless:
+        return float(q.magnitude)
+    units = str(q.units)
+    if "revolution" in units or "rpm" in units:
+        return float(q.to(reg.revolution / reg.second).magnitude)
+    if "radian" in units:
+        return float(q.to(reg.radian / reg.second).magnitude) / (2.0 * math.pi)
+    if q.dimensionality == reg.Unit("Hz").dimensionality:
+        return float(q.to("Hz").magnitude)
+    raise UnitError(f"{key}: {text!r} is not a rotational speed; use Hz, rpm or rad/s")
+
+
+def format_quantity(value: float, unit: str) -> str:
+    """Format ``value`` [unit] as text that :func:`parse_quantity` reads back exactly."""
+    return f"{value!r} {unit}" if unit else repr(value)
