@@ -1,0 +1,143 @@
+"""One step of each method, with its error estimate (the stepper half of the integrator).
+
+Both steppers integrate the 3-component state of :mod:`camdyn.core.systems`, whose
+first equation is ``dy0/dt = y1`` (a second-order system in first-order form) and
+whose third component is a quadrature that feeds back into nothing. The Rosenbrock
+stepper uses these facts to solve its linear systems in closed form.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+
+from camdyn.core import systems
+from camdyn.core.tableaus import (
+    DP_A21, DP_A31, DP_A32, DP_A41, DP_A42, DP_A43, DP_A51, DP_A52, DP_A53, DP_A54,
+    DP_A61, DP_A62, DP_A63, DP_A64, DP_A65, DP_B1, DP_B3, DP_B4, DP_B5, DP_B6,
+    DP_C2, DP_C3, DP_C4, DP_C5, DP_E1, DP_E3, DP_E4, DP_E5, DP_E6, DP_E7,
+    RB_A, RB_C, RB_CC, RB_G, RB_GAMMA, RB_M, RB_STAGES,
+)
+
+N = 3  # state size
+
+
+@numba.njit(cache=True)
+def error_norm(y0, y1, err, rtol, atol):
+    """RMS of the error over the two dynamic components, scaled by ``atol + rtol |y|``."""
+    acc = 0.0
+    for i in range(2):
+        sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
+        acc += (err[i] / sc) ** 2
+    return math.sqrt(acc / 2.0)
+
+
+@numba.njit(cache=True)
+def hermite(tau, h, y0, f0, y1, f1, out):
+    """Cubic Hermite interpolant at ``tau`` in [0, 1] of a step of size ``h``."""
+    t2 = tau * tau
+    t3 = t2 * tau
+    h00 = 2.0 * t3 - 3.0 * t2 + 1.0
+    h10 = t3 - 2.0 * t2 + tau
+    h01 = -2.0 * t3 + 3.0 * t2
+    h11 = t3 - t2
+    for i in range(N):
+        out[i] = h00 * y0[i] + h10 * h * f0[i] + h01 * y1[i] + h11 * h * f1[i]
+
+
+@numba.njit(cache=True)
+def dormand_prince_step(system, t, y, f0, h, mode, p, work, y1, f1, err):
+    """Explicit Dormand-Prince 5(4) step; ``f1`` receives f(t + h, y1) (FSAL).
+
+    ``work`` is a (6, 3) scratch array. Returns the number of right-hand-side calls.
+    """
+    yt = work[0]
+    k2 = work[1]
+    k3 = work[2]
+    k4 = work[3]
+    k5 = work[4]
+    k6 = work[5]
+    for i in range(N):
+        yt[i] = y[i] + h * DP_A21 * f0[i]
+    systems.rhs(system, t + DP_C2 * h, yt, mode, p, k2)
+    for i in range(N):
+        yt[i] = y[i] + h * (DP_A31 * f0[i] + DP_A32 * k2[i])
+    systems.rhs(system, t + DP_C3 * h, yt, mode, p, k3)
+    for i in range(N):
+        yt[i] = y[i] + h * (DP_A41 * f0[i] + DP_A42 * k2[i] + DP_A43 * k3[i])
+    systems.rhs(system, t + DP_C4 * h, yt, mode, p, k4)
+    for i in range(N):
+        yt[i] = y[i] + h * (DP_A51 * f0[i] + DP_A52 * k2[i] + DP_A53 * k3[i] + DP_A54 * k4[i])
+    systems.rhs(system, t + DP_C5 * h, yt, mode, p, k5)
+    for i in range(N):
+        yt[i] = y[i] + h * (DP_A61 * f0[i] + DP_A62 * k2[i] + DP_A63 * k3[i] + DP_A64 * k4[i]
+                            + DP_A65 * k5[i])
+    systems.rhs(system, t + h, yt, mode, p, k6)
+    for i in range(N):
+        y1[i] = y[i] + h * (DP_B1 * f0[i] + DP_B3 * k3[i] + DP_B4 * k4[i] + DP_B5 * k5[i] + DP_B6 * k6[i])
+    systems.rhs(system, t + h, y1, mode, p, f1)
+    for i in range(N):
+        err[i] = h * (DP_E1 * f0[i] + DP_E3 * k3[i] + DP_E4 * k4[i] + DP_E5 * k5[i] + DP_E6 * k6[i]
+                      + DP_E7 * f1[i])
+    return 6
+
+
+@numba.njit(cache=True)
+def _solve(c, j10, j11, j20, j21, r, g):
+    """Solve (c I - J) g = r for J = [[0, 1, 0], [j10, j11, 0], [j20, j21, 0]]."""
+    det = c * (c - j11) - j10
+    g[0] = ((c - j11) * r[0] + r[1]) / det
+    g[1] = (c * r[1] + j10 * r[0]) / det
+    g[2] = (r[2] + j20 * g[0] + j21 * g[1]) / c
+
+
+@numba.njit(cache=True)
+def rosenbrock_step(system, t, y, f0, h, mode, p, work, stages, y1, err):
+    """Linearly implicit RODAS4 step.
+
+    The Jacobian comes from the system (:func:`camdyn.core.systems.jacobian`), the time
+    derivative of the right-hand side from a forward difference. ``work`` is a (5, 3) and ``stages`` a (6, 3) scratch array. Returns the
+    number of right-hand-side calls.
+    """
+    yt = work[0]
+    fe = work[1]
+    dfdt = work[2]
+    r = work[3]
+    jac = work[4]
+    systems.jacobian(system, t, y, f0, mode, p, jac)
+    j10 = jac[0]
+    j11 = jac[1]
+    j20 = jac[2]
+    j21 = jac[3]
+    epst = 1.5e-8 * max(abs(t), 1e-3)
+    systems.rhs(system, t + epst, y, mode, p, fe)
+    for i in range(N):
+        dfdt[i] = (fe[i] - f0[i]) / epst
+    c = 1.0 / (RB_GAMMA * h)
+    calls = 1
+    for s in range(RB_STAGES):
+        if s == 0:
+            for i in range(N):
+                fe[i] = f0[i]
+        else:
+            for i in range(N):
+                acc = y[i]
+                for j in range(s):
+                    acc += RB_A[s, j] * stages[j, i]
+                yt[i] = acc
+            systems.rhs(system, t + RB_C[s] * h, yt, mode, p, fe)
+            calls += 1
+        for i in range(N):
+            acc = fe[i] + h * RB_G[s] * dfdt[i]
+            for j in range(s):
+                acc += RB_CC[s, j] * stages[j, i] / h
+            r[i] = acc
+        _solve(c, j10, j11, j20, j21, r, stages[s])
+    for i in range(N):
+        acc = y[i]
+        for s in range(RB_STAGES):
+            acc += RB_M[s] * stages[s, i]
+        y1[i] = acc
+        err[i] = stages[RB_STAGES - 1, i]
+    return calls

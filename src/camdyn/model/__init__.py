@@ -1,0 +1,1 @@
+"""The assembled cam-follower model: parameter layout, equations of motion, equilibrium."""

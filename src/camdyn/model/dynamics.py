@@ -1,0 +1,166 @@
+"""Equation of motion of the rocking follower (MODEL.md §3), compiled with numba.
+
+Clockwise moments about the pivot P (eq 3.16, 4.13, with the friction sign settled in
+:mod:`camdyn.friction`)::
+
+    I_P alpha_ddot = m g l_cg cos(alpha) + M_spring(alpha) + Fn chi + Ff h
+
+The state is ``y = (alpha [rad], alpha_dot [rad/s], W_cam [J])``; the third component
+integrates the power the cam delivers, ``P_cam = -Fn n.v_cam + Ff u.v_cam``, for the
+energy bookkeeping. The hybrid mode (:mod:`camdyn.model.layout`) holds whether the
+follower is in contact, the sign of the sliding velocity for Coulomb friction, the
+compression phase, and the approach velocity of the current contact.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+
+from camdyn.contact import contact_force
+from camdyn.friction import friction_coefficient
+from camdyn.geometry import cam_angle, contact_kinematics
+from camdyn.model import layout as L
+
+__all__ = ["spring_force", "spring_moment", "evaluate", "rhs", "guards"]
+
+
+@numba.njit(cache=True)
+def spring_force(alpha, p):
+    """Spring force ``Fs`` [N] along its axis, positive in compression.
+
+    Eq 3.10 / 4.14, ``ks (Ls - dy + dx tan(alpha) + 0.5 wb sec(alpha))``, times
+    ``cos(alpha) / cos(alpha - sigma)`` for a spring tilted by ``sigma`` (our reading
+    of the garbled eq 4.44).
+    """
+    ca = math.cos(alpha)
+    comp = p[L.LS] - p[L.DY] + p[L.DX] * math.tan(alpha) + 0.5 * p[L.WIDTH] / ca
+    fs = p[L.KS] * comp
+    if p[L.TILT] != 0.0:
+        fs *= ca / math.cos(alpha - p[L.TILT])
+    return fs
+
+
+@numba.njit(cache=True)
+def spring_moment(alpha, fs, p):
+    """Clockwise moment about P [N m] of the spring force ``fs`` [N].
+
+    The force acts along ``(sin sigma, cos sigma)`` at the attachment point
+    ``(dx, -(0.5 wb sec(alpha) + dx tan(alpha)))`` on the bar's lower face.
+    """
+    if p[L.TILT] == 0.0:
+        return -fs * p[L.DX]
+    depth = 0.5 * p[L.WIDTH] / math.cos(alpha) + p[L.DX] * math.tan(alpha)
+    return -fs * (p[L.DX] * math.cos(p[L.TILT]) + depth * math.sin(p[L.TILT]))
+
+
+@numba.njit(cache=True)
+def evaluate(t, alpha, alpha_dot, mode, p):
+    """All forces and kinematics at one instant, for the given hybrid mode.
+
+    See :func:`evaluate_shifted`; this is the case ``delta_shift = 0``.
+    """
+    return evaluate_shifted(t, alpha, alpha_dot, mode, p, 0.0)
+
+
+@numba.njit(cache=True)
+def evaluate_shifted(t, alpha, alpha_dot, mode, p, delta_shift):
+    """All forces and kinematics at one instant, for the given hybrid mode, with the
+    penetration shifted by ``delta_shift`` [m] (used by :func:`jacobian`).
+
+    Returns
+    -------
+    tuple
+        ``(alpha_ddot [rad/s^2], Fn [N], Ff [N], Fs [N], chi [m], delta [m],
+        delta_dot [m/s], vr [m/s], theta [rad], theta_dot [rad/s], P_cam [W], Fk [N])``
+    """
+    theta, theta_dot = cam_angle(t, p)
+    delta, delta_dot, chi, rho_c, vr, n_v, u_v = contact_kinematics(alpha, alpha_dot, theta, theta_dot, p)
+    delta += delta_shift
+    fs = spring_force(alpha, p)
+    moment = p[L.MASS] * p[L.GRAVITY] * p[L.CG] * math.cos(alpha) + spring_moment(alpha, fs, p)
+    fn = 0.0
+    ff = 0.0
+    fk = 0.0
+    power = 0.0
+    if mode[L.MODE_CONTACT] > 0.5:
+        fn, fk = contact_force(delta, delta_dot, rho_c, mode[L.MODE_COMPRESSING], mode[L.MODE_APPROACH], p)
+        ff = friction_coefficient(vr, mode[L.MODE_SLIP], p) * fn
+        moment += fn * chi + ff * p[L.OFFSET]
+        power = -fn * n_v + ff * u_v
+    return (moment / p[L.INERTIA], fn, ff, fs, chi, delta, delta_dot, vr, theta, theta_dot, power, fk)
+
+
+@numba.njit(cache=True)
+def rhs(t, y, mode, p, dydt):
+    """Right-hand side ``dy/dt`` of the state ``(alpha, alpha_dot, W_cam)``."""
+    alpha = y[0]
+    if mode[L.MODE_CONTACT] > 0.5:
+        res = evaluate(t, alpha, y[1], mode, p)
+        dydt[1] = res[0]
+        dydt[2] = res[10]
+    else:  # free flight: no geometry needed
+        fs = spring_force(alpha, p)
+        m = p[L.MASS] * p[L.GRAVITY] * p[L.CG] * math.cos(alpha) + spring_moment(alpha, fs, p)
+        dydt[1] = m / p[L.INERTIA]
+        dydt[2] = 0.0
+    dydt[0] = y[1]
+
+
+@numba.njit(cache=True)
+def guards(t, y, p, out):
+    """Event functions: ``out = (delta [m], vr [m/s], delta_dot [m/s])``.
+
+    ``delta`` changes sign at contact onset and separation, ``vr`` at a reversal of
+    sliding (Coulomb friction), ``delta_dot`` at peak penetration (laws D and E switch
+    there; the impact table records the peak).
+    """
+    theta, theta_dot = cam_angle(t, p)
+    delta, delta_dot, chi, rho_c, vr, n_v, u_v = contact_kinematics(y[0], y[1], theta, theta_dot, p)
+    out[0] = delta
+    out[1] = vr
+    out[2] = delta_dot
+
+
+@numba.njit(cache=True)
+def jacobian(t, y, f0, mode, p, jac):
+    """Jacobian ``(d f1/d y0, d f1/d y1, d f2/d y0, d f2/d y1)`` of the right-hand side.
+
+    The penetration ``delta`` is a small difference of large lengths (about 1 um out of
+    tens of mm), so a finite difference in ``alpha`` through ``delta`` loses most of its
+    digits, and a Rosenbrock method with such a Jacobian loses its order. The chain rule
+    separates the two paths: ``d/d alpha = (d/d alpha at fixed delta) - chi d/d delta``
+    (the envelope theorem gives ``d delta/d alpha = -chi`` exactly). The first is a
+    well-conditioned forward difference with ``delta`` held fixed, the second a
+    relative difference of the contact law in ``delta`` itself.
+    """
+    alpha = y[0]
+    ad = y[1]
+    eps_a = 1e-8
+    eps_v = 1.5e-8 * max(abs(ad), 1e-3)
+    res0 = evaluate_shifted(t, alpha, ad, mode, p, 0.0)
+    if mode[L.MODE_CONTACT] > 0.5:
+        chi = res0[4]
+        res_a = evaluate_shifted(t, alpha + eps_a, ad, mode, p, chi * eps_a)
+        j10 = (res_a[0] - res0[0]) / eps_a
+        j20 = (res_a[10] - res0[10]) / eps_a
+        # d Fn / d delta by a central relative difference of the contact law
+        theta, theta_dot = cam_angle(t, p)
+        delta, delta_dot, chi, rho_c, vr, n_v, u_v = contact_kinematics(alpha, ad, theta, theta_dot, p)
+        d = 1e-6 * max(abs(delta), 1e-12)
+        fp = contact_force(delta + d, delta_dot, rho_c, mode[L.MODE_COMPRESSING], mode[L.MODE_APPROACH], p)[0]
+        fm = contact_force(delta - d, delta_dot, rho_c, mode[L.MODE_COMPRESSING], mode[L.MODE_APPROACH], p)[0]
+        dfn = (fp - fm) / (2.0 * d)
+        mu = friction_coefficient(vr, mode[L.MODE_SLIP], p)
+        j10 -= chi * dfn * (chi + mu * p[L.OFFSET]) / p[L.INERTIA]
+        j20 -= chi * dfn * (-n_v + mu * u_v)
+    else:
+        res_a = evaluate_shifted(t, alpha + eps_a, ad, mode, p, 0.0)
+        j10 = (res_a[0] - res0[0]) / eps_a
+        j20 = 0.0
+    res_v = evaluate_shifted(t, alpha, ad + eps_v, mode, p, 0.0)
+    jac[0] = j10
+    jac[1] = (res_v[0] - res0[0]) / eps_v
+    jac[2] = j20
+    jac[3] = (res_v[10] - res0[10]) / eps_v

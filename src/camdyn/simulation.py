@@ -1,0 +1,211 @@
+"""Simulate the cam-follower and return the results as an xarray Dataset."""
+
+from __future__ import annotations
+
+import math
+import time as _time
+
+import numpy as np
+import xarray as xr
+
+from camdyn.config import flatten, system_to_toml
+from camdyn.core import driver, systems
+from camdyn.errors import ParameterError, SimulationError
+from camdyn.geometry import zero_state
+from camdyn.model import layout as L
+from camdyn.model.equilibrium import Equilibrium, static_equilibrium, viscous_coefficient
+from camdyn.model.outputs import CHANNELS, derived
+from camdyn.parameters import System
+from camdyn.units import parse_speed
+
+__all__ = ["simulate", "prepare", "impact_table", "Prepared"]
+
+METHODS = {"auto": driver.METHOD_AUTO, "explicit": driver.METHOD_EXPLICIT,
+           "rosenbrock": driver.METHOD_ROSENBROCK}
+
+
+class Prepared:
+    """A system made ready for the compiled core: parameter vector, initial state, equilibrium."""
+
+    def __init__(self, system: System):
+        self.system = system
+        theta0 = system.motion.initial_angle
+        if theta0 is None:
+            theta0 = zero_state(system)[1]
+        self.theta0 = theta0
+        self.equilibrium: Equilibrium = static_equilibrium(system, theta0)
+        self.viscous_c = viscous_coefficient(system, self.equilibrium) if self.equilibrium.in_contact else 0.0
+        if system.contact.damping in ("viscous", "stiffness-proportional-viscous", "zhang-whiten-viscous") \
+                and not self.equilibrium.in_contact:
+            self.viscous_c = viscous_coefficient(system)  # raises a clear error
+        self.p = L.pack(system, viscous_c=self.viscous_c, initial_angle=theta0)
+        self.y0 = np.array([self.equilibrium.angle, 0.0, 0.0])
+
+
+def prepare(system: System) -> Prepared:
+    """Validate ``system`` against its geometry and compute the initial state."""
+    return Prepared(system)
+
+
+def _with_speed(system: System, speed) -> System:
+    if speed is None:
+        return system
+    hz = parse_speed(speed)
+    if not math.isfinite(hz) or hz < 0:
+        raise ParameterError(f"speed must be a finite, non-negative number of Hz, got {speed!r}")
+    return system.with_values(**{"motion.speed": hz})
+
+
+def impact_table(events: np.ndarray) -> dict:
+    """Impacts from the event log: contacts that began with an onset event and ended.
+
+    Returns a dict of arrays: ``time`` [s], ``approach_velocity`` [m/s] (delta_dot at
+    onset), ``separation_velocity`` [m/s] (-delta_dot at separation), ``peak_penetration``
+    [m], ``peak_force`` [N], ``duration`` [s].
+    """
+    rows = []
+    start = None
+    peak_delta = 0.0
+    peak_force = 0.0
+    for ev in events:
+        t, k, new_sign = ev[0], int(ev[1]), ev[2]
+        if k == 0 and new_sign > 0:
+            start = ev
+            peak_delta = 0.0
+            peak_force = 0.0
+        elif start is not None and k == 2 and new_sign < 0:
+            peak_delta = max(peak_delta, ev[5])
+            peak_force = max(peak_force, ev[8])
+        elif start is not None:
+            peak_force = max(peak_force, ev[8])
+            if k == 0 and new_sign < 0:
+                rows.append((start[0], start[7], -ev[7], peak_delta, peak_force, t - start[0]))
+                start = None
+    arr = np.array(rows, dtype=float).reshape(-1, 6)
+    names = ("time", "approach_velocity", "separation_velocity", "peak_penetration", "peak_force", "duration")
+    return {name: arr[:, i] for i, name in enumerate(names)}
+
+
+def simulate(system: System, speed=None, revolutions: float = 30.0, duration: float | None = None,
+             sample_rate: float = 20e3, rtol: float = 1e-8, atol: float = 1e-10, method: str = "auto",
+             initial_state=None, max_step: float | None = None, max_steps: int = 50_000_000) -> xr.Dataset:
+    """Simulate the follower's motion.
+
+    Parameters
+    ----------
+    system : System
+        The cam-follower system (see :func:`camdyn.load_system`).
+    speed : float or str, optional
+        Cam speed [Hz] or text such as ``"693 rpm"``; default ``system.motion.speed``.
+    revolutions : float
+        Length of the run in cam periods (revolutions, or oscillations of an
+        oscillating cam) [-]. Ignored when ``duration`` is given.
+    duration : float, optional
+        Length of the run [s].
+    sample_rate : float
+        Output sampling rate [Hz].
+    rtol, atol : float
+        Local error tolerances: relative [-] and absolute [rad, rad/s].
+    method : {"auto", "explicit", "rosenbrock"}
+        Stepper choice: ``auto`` uses Rosenbrock 4(3) in contact (stiff) and
+        Dormand-Prince 5(4) in free flight.
+    initial_state : (float, float), optional
+        ``(alpha [rad], alpha_dot [rad/s])``; default the static equilibrium at ``Theta0``.
+    max_step : float, optional
+        Largest step [s]; default 1/32 of the cam period, so that no contact is
+        skipped in free flight.
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``time``: the state and every force and kinematic channel with ``units``
+        and ``long_name``; over ``impact``: the impact table. Attributes record the
+        parameters (as TOML), the solver counters and the static equilibrium.
+    """
+    system = _with_speed(system, speed)
+    if method not in METHODS:
+        raise ParameterError(f"method must be one of {sorted(METHODS)}, got {method!r}")
+    for name, val in (("rtol", rtol), ("atol", atol), ("sample_rate", sample_rate)):
+        if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
+            raise ParameterError(f"{name} must be a positive number, got {val!r}")
+    period = system.motion.period
+    if duration is None:
+        if not math.isfinite(period):
+            raise ParameterError("the cam does not move (speed 0): give a duration in seconds")
+        if not (math.isfinite(revolutions) and revolutions > 0):
+            raise ParameterError(f"revolutions must be positive, got {revolutions!r}")
+        duration = revolutions * period
+    if not (math.isfinite(duration) and duration > 0):
+        raise ParameterError(f"duration must be positive, got {duration!r}")
+    prep = prepare(system)
+    y0 = prep.y0.copy()
+    if initial_state is not None:
+        y0[0], y0[1] = float(initial_state[0]), float(initial_state[1])
+        if not np.all(np.isfinite(y0)):
+            raise ParameterError("initial_state must be finite")
+    n_out = int(math.floor(duration * sample_rate + 1e-9)) + 1
+    t_out = np.arange(n_out) / sample_rate
+    if max_step is None:
+        max_step = period / 32.0 if math.isfinite(period) else duration / 64.0
+    max_events = int(64 + 16 * (duration / period if math.isfinite(period) else 100))
+    start = _time.perf_counter()
+    y, modes, events, counters = driver.integrate(
+        systems.CAM_FOLLOWER, prep.p, y0, 0.0, float(duration), t_out, float(rtol), float(atol),
+        float(max_step), METHODS[method], int(max_steps), max_events)
+    elapsed = _time.perf_counter() - start
+    status = int(counters[driver.COUNT_STATUS])
+    if status != driver.STATUS_OK:
+        t_fail = t_out[np.isnan(y[:, 0])][0] if np.isnan(y[:, 0]).any() else duration
+        raise SimulationError(f"simulation {driver.STATUS_MESSAGES[status]} near t = {t_fail:.6g} s")
+    return _dataset(system, prep, t_out, y, modes, events, counters, elapsed, rtol, atol, method)
+
+
+def _dataset(system, prep, t, y, modes, events, counters, elapsed, rtol, atol, method) -> xr.Dataset:
+    chans = derived(t, y, modes, prep.p)
+    data = {
+        "alpha": (("time",), y[:, 0], {"units": "rad", "long_name": "follower angle (clockwise)"}),
+        "alpha_dot": (("time",), y[:, 1], {"units": "rad/s", "long_name": "follower angular velocity"}),
+        "cam_work": (("time",), y[:, 2], {"units": "J", "long_name": "work done by the cam on the follower"}),
+    }
+    for j, (name, unit, long_name) in enumerate(CHANNELS):
+        values = chans[:, j]
+        if name == "in_contact":
+            values = values.astype(np.int8)
+        data[name] = (("time",), values, {"units": unit, "long_name": long_name})
+    imp = impact_table(events)
+    imp_meta = {
+        "time": ("s", "impact onset time"),
+        "approach_velocity": ("m/s", "approach velocity delta_dot at onset"),
+        "separation_velocity": ("m/s", "separation velocity -delta_dot at the end of contact"),
+        "peak_penetration": ("m", "peak penetration"),
+        "peak_force": ("N", "peak normal force"),
+        "duration": ("s", "contact duration"),
+    }
+    for name, (unit, long_name) in imp_meta.items():
+        data[f"impact_{name}"] = (("impact",), imp[name], {"units": unit, "long_name": long_name})
+    ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
+    eq = prep.equilibrium
+    attrs = {
+        "title": f"camdyn simulation of {system.name}",
+        "citation": system.citation,
+        "parameters_toml": system_to_toml(system),
+        "speed_hz": system.motion.speed,
+        "rtol": rtol, "atol": atol, "method": method,
+        "elapsed_s": elapsed,
+        "status": driver.STATUS_MESSAGES[int(counters[driver.COUNT_STATUS])],
+        "equilibrium_angle_rad": eq.angle,
+        "equilibrium_contact_force_N": eq.contact_force,
+        "natural_frequency_Hz": eq.natural_frequency,
+        "initial_cam_angle_rad": prep.theta0,
+        "viscous_damping_N_s_per_m": prep.viscous_c,
+    }
+    for i, name in enumerate(driver.COUNTER_NAMES):
+        attrs[f"solver_{name}"] = int(counters[i])
+    ds.attrs.update(attrs)
+    return ds
+
+
+def parameters_of(ds: xr.Dataset) -> dict:
+    """Dotted-key parameters recorded in a result (as written by :func:`simulate`)."""
+    import tomllib
+    return flatten(tomllib.loads(ds.attrs["parameters_toml"]))
