@@ -2,8 +2,8 @@
 
 Algorithm (per accepted step from ``t`` to ``t + h``):
 
-1. step with Dormand-Prince 5(4) (non-stiff modes) or Rosenbrock 4(3) (stiff modes,
-   e.g. sustained contact), accept if the scaled error norm is at most 1;
+1. step with Dormand-Prince 5(4) or the Rosenbrock method RODAS4 (chosen per mode by
+   the system, or forced), accept if the scaled error norm is at most 1;
 2. build the cubic Hermite interpolant of the step;
 3. for every guard active in the current mode, look for a sign change against its
    expected sign at the step end, the midpoint, and the extrema of the guard's own

@@ -1,0 +1,1 @@
+"""Analysis of simulated or measured responses."""

@@ -1,0 +1,220 @@
+"""The ``camdyn`` command line.
+
+Every input error prints one line, ``error: ...``, on standard error and exits with
+status 2 (no traceback).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+from typing import List, Optional
+
+import click
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from camdyn.config import SCHEMA, list_presets, load_system, parse_assignments, preset_text, system_to_toml
+from camdyn.errors import CamdynError
+from camdyn.units import parse_quantity, parse_speed
+
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help="Nonlinear dynamics of cam-follower systems with rolling-sliding contact.")
+presets_app = typer.Typer(help="List and show bundled parameter presets.", invoke_without_command=True)
+app.add_typer(presets_app, name="presets")
+console = Console()
+
+SetOption = typer.Option(None, "--set", "-s", help="Override a parameter: KEY=VALUE, e.g. cam.runout=3.5mm.")
+
+
+def _system(source: str, assignments):
+    return load_system(source, parse_assignments(assignments))
+
+
+@presets_app.callback()
+def presets_list(ctx: typer.Context):
+    """List the presets (name and citation)."""
+    if ctx.invoked_subcommand is not None:
+        return
+    import tomllib
+    table = Table("preset", "description")
+    for name in list_presets():
+        meta = tomllib.loads(preset_text(name)).get("preset", {})
+        table.add_row(name, meta.get("description", ""))
+    console.print(table)
+
+
+@presets_app.command("show")
+def presets_show(name: str):
+    """Print a preset as TOML (copy it to start your own configuration)."""
+    typer.echo(preset_text(name) if name in list_presets() else system_to_toml(load_system(name)))
+
+
+@presets_app.command("keys")
+def presets_keys():
+    """List every parameter key, its unit and meaning."""
+    table = Table("key", "unit", "meaning")
+    for key, (unit, text) in SCHEMA.items():
+        table.add_row(key, unit, text)
+    console.print(table)
+
+
+@app.command()
+def equilibrium(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
+                set_: Optional[List[str]] = SetOption,
+                json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
+    """Static equilibrium angle, contact force and linearized natural frequency."""
+    from camdyn.model.equilibrium import static_equilibrium
+    system = _system(source, set_)
+    eq = static_equilibrium(system)
+    out = {
+        "angle_deg": math.degrees(eq.angle), "angle_rad": eq.angle,
+        "cam_angle_deg": math.degrees(eq.cam_angle), "in_contact": eq.in_contact,
+        "contact_force_N": eq.contact_force, "penetration_m": eq.penetration,
+        "moment_arm_m": eq.moment_arm, "natural_frequency_Hz": eq.natural_frequency,
+        "rotational_stiffness_N_m_per_rad": eq.stiffness,
+    }
+    if json_out:
+        typer.echo(json.dumps(out, indent=2))
+        return
+    table = Table("quantity", "value", title=f"static equilibrium of {system.name}")
+    table.add_row("follower angle alpha*", f"{out['angle_deg']:.5f} deg")
+    table.add_row("cam angle Theta0", f"{out['cam_angle_deg']:.3f} deg")
+    table.add_row("in contact", str(eq.in_contact))
+    table.add_row("contact force Fn*", f"{eq.contact_force:.4g} N")
+    table.add_row("penetration delta*", f"{eq.penetration * 1e6:.4g} um")
+    table.add_row("moment arm chi*", f"{eq.moment_arm * 1e3:.4g} mm")
+    table.add_row("natural frequency", f"{eq.natural_frequency:.5g} Hz")
+    console.print(table)
+
+
+def _summary(ds) -> dict:
+    from camdyn.analysis.harmonics import harmonic_amplitudes
+    speed = float(ds.attrs["speed_hz"])
+    revs = (float(ds.time[-1]) - float(ds.time[0])) * speed
+    out = {
+        "preset": ds.attrs["title"].replace("camdyn simulation of ", ""),
+        "speed_hz": speed,
+        "revolutions": revs,
+        "equilibrium_angle_deg": math.degrees(ds.attrs["equilibrium_angle_rad"]),
+        "natural_frequency_Hz": ds.attrs["natural_frequency_Hz"],
+        "Fn_min_N": float(ds.Fn.min()), "Fn_max_N": float(ds.Fn.max()),
+        "contact_fraction": float(ds.in_contact.mean()),
+        "impacts": int(ds.sizes.get("impact", 0)),
+        "impacts_per_revolution": int(ds.sizes.get("impact", 0)) / revs if revs else 0.0,
+        "elapsed_s": ds.attrs["elapsed_s"],
+        "solver": {k[7:]: v for k, v in ds.attrs.items() if k.startswith("solver_")},
+    }
+    if revs >= 4 and speed > 0:
+        n = max(1, int(min(10, revs // 2)))
+        a1, a2 = harmonic_amplitudes(ds, "alpha_ddot", (1, 2), revolutions=n)
+        out["alpha_ddot_harmonic1_rad_s2"] = float(a1)
+        out["alpha_ddot_harmonic2_rad_s2"] = float(a2)
+    if out["impacts"]:
+        out["last_impact"] = {
+            "approach_velocity_m_s": float(ds.impact_approach_velocity[-1]),
+            "separation_velocity_m_s": float(ds.impact_separation_velocity[-1]),
+            "peak_penetration_m": float(ds.impact_peak_penetration[-1]),
+            "peak_force_N": float(ds.impact_peak_force[-1]),
+            "duration_s": float(ds.impact_duration[-1]),
+        }
+    return out
+
+
+def _print_summary(out: dict):
+    table = Table("quantity", "value", title=f"simulation of {out['preset']}")
+    table.add_row("cam speed", f"{out['speed_hz']:.4g} Hz ({out['speed_hz'] * 60:.4g} rpm)")
+    table.add_row("revolutions", f"{out['revolutions']:.4g}")
+    table.add_row("equilibrium angle", f"{out['equilibrium_angle_deg']:.4f} deg")
+    table.add_row("linearized natural frequency", f"{out['natural_frequency_Hz']:.5g} Hz")
+    table.add_row("normal force Fn", f"{out['Fn_min_N']:.4g} to {out['Fn_max_N']:.4g} N")
+    table.add_row("time in contact", f"{100 * out['contact_fraction']:.1f} %")
+    table.add_row("impacts", f"{out['impacts']} ({out['impacts_per_revolution']:.3g} per revolution)")
+    if "alpha_ddot_harmonic1_rad_s2" in out:
+        table.add_row("alpha_ddot, 1st cam harmonic", f"{out['alpha_ddot_harmonic1_rad_s2']:.4g} rad/s^2")
+        table.add_row("alpha_ddot, 2nd cam harmonic", f"{out['alpha_ddot_harmonic2_rad_s2']:.4g} rad/s^2")
+    if "last_impact" in out:
+        li = out["last_impact"]
+        table.add_row("last impact: approach / separation",
+                      f"{li['approach_velocity_m_s']:.4g} / {li['separation_velocity_m_s']:.4g} m/s")
+        table.add_row("last impact: peak penetration, force",
+                      f"{li['peak_penetration_m'] * 1e6:.4g} um, {li['peak_force_N']:.4g} N")
+    s = out["solver"]
+    table.add_row("solver", f"{s['accepted_steps']} steps ({s['rejected_steps']} rejected), "
+                            f"{s['rhs_calls']} rhs calls, {s['events']} events, {out['elapsed_s'] * 1e3:.1f} ms")
+    console.print(table)
+
+
+@app.command()
+def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
+             set_: Optional[List[str]] = SetOption,
+             speed: Optional[str] = typer.Option(None, help="Cam speed, e.g. 11.55Hz or 693rpm."),
+             revolutions: float = typer.Option(30.0, help="Number of cam revolutions."),
+             sample_rate: str = typer.Option("20kHz", help="Output sampling rate."),
+             out: Optional[Path] = typer.Option(None, help="Write the results to this netCDF file."),
+             plot: Optional[Path] = typer.Option(None, help="Write a time-history figure (PNG)."),
+             method: str = typer.Option("auto", help="auto, explicit or rosenbrock."),
+             rtol: float = typer.Option(1e-8, help="Relative tolerance."),
+             json_out: bool = typer.Option(False, "--json", help="Print a JSON summary.")):
+    """Simulate the follower and summarise the response."""
+    from camdyn.simulation import simulate as run
+    system = _system(source, set_)
+    fs = parse_quantity(sample_rate, "Hz", "--sample-rate")
+    if speed is not None:
+        speed = parse_speed(speed, "--speed")
+    ds = run(system, speed=speed, revolutions=revolutions, sample_rate=fs, method=method, rtol=rtol)
+    summary = _summary(ds)
+    if out is not None:
+        from camdyn.io import save_netcdf
+        save_netcdf(ds, out)
+        summary["netcdf"] = str(out)
+    if plot is not None:
+        from camdyn.plotting import plot_time_history
+        plot_time_history(ds, plot)
+        summary["figure"] = str(plot)
+    if json_out:
+        typer.echo(json.dumps(summary, indent=2))
+    else:
+        _print_summary(summary)
+        for key in ("netcdf", "figure"):
+            if key in summary:
+                console.print(f"wrote {summary[key]}")
+
+
+@app.command()
+def demo(out: Path = typer.Option(Path("out"), help="Folder for the figures and results.")):
+    """Run the demonstration on the bundled presets: print key results, write figures."""
+    from camdyn.demo import run_demo
+    run_demo(out, console)
+
+
+def main(argv=None) -> int:
+    """Entry point: run the app, turning input errors into one line and exit status 2."""
+    try:
+        app(args=argv, standalone_mode=False, prog_name="camdyn")
+    except CamdynError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except click.exceptions.UsageError as exc:
+        print(f"error: {exc.format_message()}", file=sys.stderr)
+        return 2
+    except click.exceptions.Abort:
+        print("aborted", file=sys.stderr)
+        return 1
+    except click.exceptions.Exit as exc:
+        return exc.exit_code
+    except OSError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
+
+
+def run() -> None:  # console-script entry point
+    sys.exit(main())
