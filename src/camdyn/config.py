@@ -124,7 +124,9 @@ def _convert(key: str, raw, values: dict) -> object:
     if unit == "speed":
         return parse_speed(raw, key)
     if unit == "law":
-        law = values.get("contact.damping", "none")
+        law = str(values.get("contact.damping", "none")).strip()
+        if DAMPING_ALIASES.get(law, law) not in DAMPING_LAWS:
+            raise ParameterError(f"contact.damping must be one of {sorted(DAMPING_LAWS)} (or A-E), got {law!r}")
         exponent = values.get("contact.exponent", 1.5)
         if isinstance(exponent, str):
             exponent = parse_quantity(exponent, "", "contact.exponent")

@@ -86,7 +86,7 @@ def _touch_angle(p: np.ndarray, theta: float) -> float:
     vals = np.array([f(a) for a in grid])
     idx = np.nonzero(np.diff(np.sign(vals)) < 0)[0]
     if idx.size == 0:
-        raise GeometryError("the follower cannot touch the cam within ±34 degrees of horizontal; "
+        raise GeometryError("the cam cannot reach the follower within ±34 degrees of horizontal; "
                             "check cam.pivot_x, cam.pivot_y, cam.radius and follower.width")
     i = idx[np.argmin(np.abs(grid[idx]))]
     return brentq(f, grid[i], grid[i + 1], xtol=1e-15, rtol=1e-15)
@@ -143,7 +143,7 @@ def static_equilibrium(system: System, theta0: float | None = None) -> Equilibri
         contact = False
         thetas = np.linspace(0, 2 * math.pi, 721)
         reach = max(contact_point(alpha, th, ps)[0] for th in thetas)
-        if reach < 0.0 and system.motion.kind == "constant":
+        if reach < -1e-6 * system.cam.semi_major and system.motion.kind == "constant":
             raise GeometryError(
                 f"the cam cannot reach the follower: at its rest angle {math.degrees(alpha):.3g} deg the "
                 f"closest approach over a revolution leaves a gap of {-reach*1e6:.3g} um")
