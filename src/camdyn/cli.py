@@ -12,7 +12,6 @@ import sys
 from pathlib import Path
 from typing import List, Optional
 
-import click
 import typer
 from rich.console import Console
 from rich.table import Table
@@ -20,6 +19,11 @@ from rich.table import Table
 from camdyn.config import SCHEMA, list_presets, load_system, parse_assignments, preset_text, system_to_toml
 from camdyn.errors import CamdynError
 from camdyn.units import parse_quantity, parse_speed
+
+try:  # recent typer vendors click
+    from typer._click import exceptions as click_exceptions
+except ImportError:  # pragma: no cover
+    from click import exceptions as click_exceptions
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Nonlinear dynamics of cam-follower systems with rolling-sliding contact.")
@@ -198,13 +202,13 @@ def main(argv=None) -> int:
     except CamdynError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    except click.exceptions.UsageError as exc:
+    except click_exceptions.UsageError as exc:
         print(f"error: {exc.format_message()}", file=sys.stderr)
         return 2
-    except click.exceptions.Abort:
+    except click_exceptions.Abort:
         print("aborted", file=sys.stderr)
         return 1
-    except click.exceptions.Exit as exc:
+    except click_exceptions.Exit as exc:
         return exc.exit_code
     except OSError as exc:
         print(f"error: {exc}", file=sys.stderr)
