@@ -4,7 +4,8 @@ Algorithm (per accepted step from ``t`` to ``t + h``):
 
 1. step with Dormand-Prince 5(4) or the Rosenbrock method RODAS4 (chosen per mode by
    the system, or forced), accept if the scaled error norm is at most 1;
-2. build the cubic Hermite interpolant of the step;
+2. build the step's continuous extension (Dormand-Prince's own 4th-order dense output,
+   or the cubic Hermite interpolant after a Rosenbrock step);
 3. for every guard active in the current mode, look for a sign change against its
    expected sign at the step end, the midpoint, and the extrema of the guard's own
    cubic (from its exact rate, where the system supplies it; this catches grazing
@@ -26,7 +27,7 @@ import numba
 import numpy as np
 
 from camdyn.core import systems
-from camdyn.core.steppers import dormand_prince_step, error_norm, hermite, rosenbrock_step
+from camdyn.core.steppers import dense, dormand_prince_step, error_norm, rosenbrock_step
 
 COUNT_ACCEPTED = 0
 COUNT_REJECTED = 1
@@ -68,21 +69,21 @@ NG = systems.N_GUARDS
 
 
 @numba.njit(cache=True)
-def _guard_at(system, t, h, tau, y0, f0, y1, f1, p, ytmp, vals, rates):
-    hermite(tau, h, y0, f0, y1, f1, ytmp)
+def _guard_at(system, t, h, tau, y0, f0, y1, f1, work, explicit, p, ytmp, vals, rates):
+    dense(tau, h, y0, f0, y1, f1, work, explicit, ytmp)
     systems.guards(system, t + tau * h, ytmp, p, vals, rates)
 
 
 @numba.njit(cache=True)
-def _locate(system, k, sign, t, h, ta, tb, y0, f0, y1, f1, p, ytmp, vals, rates, counters):
+def _locate(system, k, sign, t, h, ta, tb, y0, f0, y1, f1, work, explicit, p, ytmp, vals, rates, counters):
     """Illinois iteration for the crossing of guard ``k`` in (ta, tb] (fractions of h).
 
     ``sign * g`` is >= 0 at ``ta`` and < 0 at ``tb``; returns the right end of the final
     bracket, where the guard already has its new sign.
     """
-    _guard_at(system, t, h, ta, y0, f0, y1, f1, p, ytmp, vals, rates)
+    _guard_at(system, t, h, ta, y0, f0, y1, f1, work, explicit, p, ytmp, vals, rates)
     fa = max(sign * vals[k], 0.0)
-    _guard_at(system, t, h, tb, y0, f0, y1, f1, p, ytmp, vals, rates)
+    _guard_at(system, t, h, tb, y0, f0, y1, f1, work, explicit, p, ytmp, vals, rates)
     fb = sign * vals[k]
     side = 0
     tol = 4e-16 * max(1.0, abs(t)) / max(abs(h), 1e-300) + 1e-15
@@ -92,7 +93,7 @@ def _locate(system, k, sign, t, h, ta, tb, y0, f0, y1, f1, p, ytmp, vals, rates,
         tm = tb - fb * (tb - ta) / (fb - fa) if fb != fa else 0.5 * (ta + tb)
         if not (ta < tm < tb):
             tm = 0.5 * (ta + tb)
-        _guard_at(system, t, h, tm, y0, f0, y1, f1, p, ytmp, vals, rates)
+        _guard_at(system, t, h, tm, y0, f0, y1, f1, work, explicit, p, ytmp, vals, rates)
         counters[COUNT_ROOT_ITERATIONS] += 1
         fm = sign * vals[k]
         if fm < 0.0:
@@ -229,7 +230,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             counters[COUNT_EXPLICIT] += 1
         systems.guards(system, t + h, y1, p, g1, gr1)
         # midpoint guards (shared by all guards), needed only by guards without a rate
-        hermite(0.5, h, y, f, y1, f1, ymid)
+        dense(0.5, h, y, f, y1, f1, work, not use_rosenbrock, ymid)
         need_mid = False
         for k in range(NG):
             if systems.expected_sign(system, k, mode, p) != 0.0 and (math.isnan(gr[k]) or math.isnan(gr1[k])):
@@ -291,23 +292,23 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
                 elif tau == 1.0:
                     v = s * g1[k]
                 else:
-                    _guard_at(system, t, h, tau, y, f, y1, f1, p, ytmp, g_tmp, gr_tmp)
+                    _guard_at(system, t, h, tau, y, f, y1, f1, work, not use_rosenbrock, p, ytmp, g_tmp, gr_tmp)
                     v = s * g_tmp[k]
                 if v < 0.0:
                     found = tau
                     break
                 prev = tau
             if found > 0.0 and prev < tau_event:
-                tau_k = _locate(system, k, s, t, h, prev, found, y, f, y1, f1, p, ytmp, g_tmp, gr_tmp,
-                                counters)
+                tau_k = _locate(system, k, s, t, h, prev, found, y, f, y1, f1, work, not use_rosenbrock, p,
+                                ytmp, g_tmp, gr_tmp, counters)
                 if tau_k < tau_event:
                     tau_event = tau_k
                     k_event = k
         if k_event >= 0:
             t_new = t + tau_event * h
-            hermite(tau_event, h, y, f, y1, f1, ytmp)
+            dense(tau_event, h, y, f, y1, f1, work, not use_rosenbrock, ytmp)
             while i_out < n_out and t_out[i_out] <= t_new:
-                hermite((t_out[i_out] - t) / h, h, y, f, y1, f1, yo)
+                dense((t_out[i_out] - t) / h, h, y, f, y1, f1, work, not use_rosenbrock, yo)
                 for i in range(3):
                     y_out[i_out, i] = yo[i]
                 for i in range(MODE_SIZE):
@@ -351,7 +352,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             h = max(h * tau_event, h * 0.1) if tau_event > 0.0 else h
         else:
             while i_out < n_out and t_out[i_out] <= t + h:
-                hermite((t_out[i_out] - t) / h, h, y, f, y1, f1, ytmp)
+                dense((t_out[i_out] - t) / h, h, y, f, y1, f1, work, not use_rosenbrock, ytmp)
                 for i in range(3):
                     y_out[i_out, i] = ytmp[i]
                 for i in range(MODE_SIZE):

@@ -16,7 +16,7 @@ from camdyn.core import systems
 from camdyn.core.tableaus import (
     DP_A21, DP_A31, DP_A32, DP_A41, DP_A42, DP_A43, DP_A51, DP_A52, DP_A53, DP_A54,
     DP_A61, DP_A62, DP_A63, DP_A64, DP_A65, DP_B1, DP_B3, DP_B4, DP_B5, DP_B6,
-    DP_C2, DP_C3, DP_C4, DP_C5, DP_E1, DP_E3, DP_E4, DP_E5, DP_E6, DP_E7,
+    DP_C2, DP_C3, DP_C4, DP_C5, DP_E1, DP_E3, DP_E4, DP_E5, DP_E6, DP_E7, DP_P,
     RB_A, RB_C, RB_CC, RB_G, RB_GAMMA, RB_M, RB_STAGES,
 )
 
@@ -44,6 +44,27 @@ def hermite(tau, h, y0, f0, y1, f1, out):
     h11 = t3 - t2
     for i in range(N):
         out[i] = h00 * y0[i] + h10 * h * f0[i] + h01 * y1[i] + h11 * h * f1[i]
+
+
+@numba.njit(cache=True)
+def dense(tau, h, y0, f0, y1, f1, work, explicit, out):
+    """State at ``t + tau h`` inside the last step.
+
+    Dormand-Prince steps use their own 4th-order continuous extension (stages k2..k6
+    are still in ``work[1:6]``); Rosenbrock steps use the cubic Hermite interpolant.
+    """
+    if not explicit:
+        hermite(tau, h, y0, f0, y1, f1, out)
+        return
+    t2 = tau * tau
+    t3 = t2 * tau
+    t4 = t3 * tau
+    for i in range(N):
+        acc = f0[i] * (DP_P[0, 0] * tau + DP_P[0, 1] * t2 + DP_P[0, 2] * t3 + DP_P[0, 3] * t4)
+        for s in range(2, 6):  # work[s] holds k_(s+1); P row s; k2's row is zero
+            acc += work[s, i] * (DP_P[s, 1] * t2 + DP_P[s, 2] * t3 + DP_P[s, 3] * t4)
+        acc += f1[i] * (DP_P[6, 1] * t2 + DP_P[6, 2] * t3 + DP_P[6, 3] * t4)
+        out[i] = y0[i] + h * acc
 
 
 @numba.njit(cache=True)

@@ -1,0 +1,27 @@
+# Two commands do all the set-up on a fresh machine with Python 3.11:
+#   make demo   - create .venv, install camdyn, run the demonstration (prints results, writes out/)
+#   make test   - create .venv, install camdyn with test extras, run the test suite
+PYTHON ?= python3
+VENV ?= .venv
+BIN = $(VENV)/bin
+
+$(BIN)/.installed: pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e ".[test]"
+	touch $@
+
+.PHONY: demo test bench install clean
+install: $(BIN)/.installed
+
+demo: $(BIN)/.installed
+	$(BIN)/camdyn demo --out out
+
+test: $(BIN)/.installed
+	$(BIN)/python -m pytest -q
+
+bench: $(BIN)/.installed
+	$(BIN)/python benchmarks/bench_simulate.py
+
+clean:
+	rm -rf $(VENV) out .pytest_cache
