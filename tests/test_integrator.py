@@ -94,3 +94,28 @@ def test_crossing_inside_a_long_step_is_located():
     exact_t = math.atan2(1e-3, 0.05)  # y = 1e-3 cos t - 0.05 sin t = 0
     assert events.shape[0] == 1
     assert events[0, 0] == pytest.approx(exact_t, abs=1e-10)
+
+
+def test_dense_output_is_fourth_order():
+    # the continuous extension of Dormand-Prince is (at least) 4th order: its local error
+    # inside one step falls by at least 2^5 when the step is halved (a cubic Hermite
+    # interpolant would only give 2^4); on this linear problem it does better still
+    from camdyn.core.steppers import dense
+    p = np.array([W0, ZETA, AMP, WF, 0.0])
+    mode = np.zeros(driver.MODE_SIZE)
+    errs = []
+    for h in (0.8, 0.4, 0.2):
+        y = np.array([1.0, 0.0, 0.0])
+        f = np.empty(3)
+        systems.rhs(systems.OSCILLATOR, 0.0, y, mode, p, f)
+        work, y1, f1, err, out = np.empty((6, 3)), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+        dormand_prince_step(systems.OSCILLATOR, 0.0, y, f, h, mode, p, work, y1, f1, err)
+        worst = 0.0
+        for theta in np.linspace(0.05, 0.95, 19):
+            dense(theta, h, y, f, y1, f1, work, True, out)
+            worst = max(worst, abs(out[0] - exact(theta * h, 1.0, 0.0)[0]))
+        errs.append(worst)
+        dense(1.0, h, y, f, y1, f1, work, True, out)
+        assert out[0] == pytest.approx(y1[0], rel=1e-13, abs=1e-14)
+    ratios = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
+    assert ratios.min() > 4.6, ratios
