@@ -141,7 +141,12 @@ def contact_force(delta, delta_dot, rho_c, compressing, approach, p):
         c = p[L.BETA] * ad ** 0.25 if compressing > 0.5 else p[L.VISCOUS_C]
     elif code == 6:
         n = p[L.EXPONENT]
-        c = p[L.BETA] * (ad ** n if n != 0.0 else 1.0)
+        if n == 1.5:
+            c = p[L.BETA] * ad * math.sqrt(ad)
+        elif n == 0.0:
+            c = p[L.BETA]
+        else:
+            c = p[L.BETA] * ad ** n
     elif code >= 7:
         v = max(approach, p[L.V_REFERENCE])
         c = _factor(code, p[L.RESTITUTION]) * kd * ad / v   # chi(e) K delta^nH / v

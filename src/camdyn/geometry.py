@@ -53,10 +53,13 @@ def contact_point(alpha, theta, p):
     xc, yc : float
         Contact point ``Xc`` on the cam [m].
     """
-    ca = math.cos(alpha)
-    sa = math.sin(alpha)
-    ct = math.cos(theta)
-    st = math.sin(theta)
+    return contact_point_trig(math.cos(alpha), math.sin(alpha), math.cos(theta), math.sin(theta), p)
+
+
+@numba.njit(cache=True)
+def contact_point_trig(ca, sa, ct, st, p):
+    """:func:`contact_point` from ``cos/sin`` of ``alpha`` and ``Theta`` (computed once by
+    the right-hand side and shared with the spring and gravity terms)."""
     a = p[L.SEMI_A]
     b = p[L.SEMI_B]
     e = p[L.RUNOUT]
@@ -65,13 +68,14 @@ def contact_point(alpha, theta, p):
     n1 = sa * ct + ca * st              # n . e1
     n2 = -sa * st + ca * ct             # n . e2
     s = math.sqrt(a * a * n1 * n1 + b * b * n2 * n2)
+    inv_s = 1.0 / s
     delta = p[L.OFFSET] + s - (sa * gx + ca * gy)
-    q1 = a * a * n1 / s
-    q2 = b * b * n2 / s
+    q1 = a * a * n1 * inv_s
+    q2 = b * b * n2 * inv_s
     xc = gx - (q1 * ct - q2 * st)
     yc = gy - (q1 * st + q2 * ct)
     chi = ca * xc - sa * yc
-    rho_c = a * a * b * b / (s * s * s)
+    rho_c = a * a * b * b * inv_s * inv_s * inv_s
     return delta, chi, rho_c, xc, yc
 
 
@@ -95,9 +99,14 @@ def contact_kinematics(alpha, alpha_dot, theta, theta_dot, p):
     n_vcam, u_vcam : float
         Normal and tangential components of the cam's material velocity at Xc [m/s].
     """
-    delta, chi, rho_c, xc, yc = contact_point(alpha, theta, p)
-    ca = math.cos(alpha)
-    sa = math.sin(alpha)
+    return contact_kinematics_trig(math.cos(alpha), math.sin(alpha), math.cos(theta), math.sin(theta),
+                                   alpha_dot, theta_dot, p)
+
+
+@numba.njit(cache=True)
+def contact_kinematics_trig(ca, sa, ct, st, alpha_dot, theta_dot, p):
+    """:func:`contact_kinematics` from ``cos/sin`` of ``alpha`` and ``Theta``."""
+    delta, chi, rho_c, xc, yc = contact_point_trig(ca, sa, ct, st, p)
     vx = -theta_dot * (yc - p[L.PIVOT_Y])   # v_cam = Theta_dot z x (Xc - E)
     vy = theta_dot * (xc - p[L.PIVOT_X])
     n_v = sa * vx + ca * vy

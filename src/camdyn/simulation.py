@@ -21,7 +21,7 @@ from camdyn.units import parse_speed
 __all__ = ["simulate", "prepare", "impact_table", "Prepared"]
 
 METHODS = {"auto": driver.METHOD_AUTO, "explicit": driver.METHOD_EXPLICIT,
-           "rosenbrock": driver.METHOD_ROSENBROCK}
+           "dop853": driver.METHOD_DOP853, "rosenbrock": driver.METHOD_ROSENBROCK}
 
 
 class Prepared:
@@ -106,11 +106,11 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
         Output sampling rate [Hz].
     rtol, atol : float
         Local error tolerances: relative [-] and absolute [rad, rad/s].
-    method : {"auto", "explicit", "rosenbrock"}
-        Stepper choice: ``auto`` lets the system choose (the cam-follower uses
-        Dormand-Prince 5(4), which measured fastest in every regime, see
-        docs/integrator.md); ``explicit`` forces Dormand-Prince; ``rosenbrock`` forces
-        the L-stable RODAS4.
+    method : {"auto", "dop853", "explicit", "rosenbrock"}
+        Stepper choice: ``auto`` lets the system choose (the cam-follower uses DOP853,
+        which measured fastest in every regime, see docs/integrator.md); ``dop853``,
+        ``explicit`` (Dormand-Prince 5(4)) and ``rosenbrock`` (the L-stable RODAS4)
+        force one.
     initial_state : (float, float), optional
         ``(alpha [rad], alpha_dot [rad/s])``; default the static equilibrium at ``Theta0``.
     max_step : float, optional

@@ -2,7 +2,7 @@
 
 Algorithm (per accepted step from ``t`` to ``t + h``):
 
-1. step with Dormand-Prince 5(4) or the Rosenbrock method RODAS4 (chosen per mode by
+1. step with DOP853, Dormand-Prince 5(4) or the Rosenbrock method RODAS4 (chosen per mode by
    the system, or forced), accept if the scaled error norm is at most 1;
 2. build the step's continuous extension (Dormand-Prince's own 4th-order dense output,
    or the cubic Hermite interpolant after a Rosenbrock step);
@@ -27,7 +27,10 @@ import numba
 import numpy as np
 
 from camdyn.core import systems
-from camdyn.core.steppers import dense, dormand_prince_step, error_norm, rosenbrock_step
+from camdyn.core.steppers import (
+    KIND_DOP853, KIND_DP5, KIND_HERMITE, dense, dop853_error_norm, dop853_extend, dop853_step,
+    dormand_prince_step, error_norm, rosenbrock_step,
+)
 
 COUNT_ACCEPTED = 0
 COUNT_REJECTED = 1
@@ -57,9 +60,10 @@ STATUS_MESSAGES = {
                  "try tanh friction or another damping law",
 }
 
-METHOD_AUTO = 0  # see systems.stiff
-METHOD_EXPLICIT = 1
-METHOD_ROSENBROCK = 2
+METHOD_AUTO = 0  # the system chooses (systems.preferred_method)
+METHOD_EXPLICIT = 1  # Dormand-Prince 5(4)
+METHOD_ROSENBROCK = 2  # RODAS4
+METHOD_DOP853 = 3  # DOP853
 
 EVENT_COLUMNS = ("time", "guard", "new_sign", "alpha", "alpha_dot", "guard0", "guard1", "guard2",
                  "monitor_max")
@@ -69,21 +73,21 @@ NG = systems.N_GUARDS
 
 
 @numba.njit(cache=True)
-def _guard_at(system, t, h, tau, y0, f0, y1, f1, work, explicit, p, ytmp, vals, rates):
-    dense(tau, h, y0, f0, y1, f1, work, explicit, ytmp)
+def _guard_at(system, t, h, tau, y0, f0, y1, f1, work, kind, p, ytmp, vals, rates):
+    dense(tau, h, y0, f0, y1, f1, work, kind, ytmp)
     systems.guards(system, t + tau * h, ytmp, p, vals, rates)
 
 
 @numba.njit(cache=True)
-def _locate(system, k, sign, t, h, ta, tb, y0, f0, y1, f1, work, explicit, p, ytmp, vals, rates, counters):
+def _locate(system, k, sign, t, h, ta, tb, y0, f0, y1, f1, work, kind, p, ytmp, vals, rates, counters):
     """Illinois iteration for the crossing of guard ``k`` in (ta, tb] (fractions of h).
 
     ``sign * g`` is >= 0 at ``ta`` and < 0 at ``tb``; returns the right end of the final
     bracket, where the guard already has its new sign.
     """
-    _guard_at(system, t, h, ta, y0, f0, y1, f1, work, explicit, p, ytmp, vals, rates)
+    _guard_at(system, t, h, ta, y0, f0, y1, f1, work, kind, p, ytmp, vals, rates)
     fa = max(sign * vals[k], 0.0)
-    _guard_at(system, t, h, tb, y0, f0, y1, f1, work, explicit, p, ytmp, vals, rates)
+    _guard_at(system, t, h, tb, y0, f0, y1, f1, work, kind, p, ytmp, vals, rates)
     fb = sign * vals[k]
     side = 0
     tol = 4e-16 * max(1.0, abs(t)) / max(abs(h), 1e-300) + 1e-15
@@ -93,7 +97,7 @@ def _locate(system, k, sign, t, h, ta, tb, y0, f0, y1, f1, work, explicit, p, yt
         tm = tb - fb * (tb - ta) / (fb - fa) if fb != fa else 0.5 * (ta + tb)
         if not (ta < tm < tb):
             tm = 0.5 * (ta + tb)
-        _guard_at(system, t, h, tm, y0, f0, y1, f1, work, explicit, p, ytmp, vals, rates)
+        _guard_at(system, t, h, tm, y0, f0, y1, f1, work, kind, p, ytmp, vals, rates)
         counters[COUNT_ROOT_ITERATIONS] += 1
         fm = sign * vals[k]
         if fm < 0.0:
@@ -131,7 +135,8 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     h_max : float
         Largest step [s].
     method : int
-        0 picks by mode (``systems.stiff``), 1 always explicit, 2 always Rosenbrock.
+        0 lets the system choose per mode (``systems.preferred_method``); 1 Dormand-Prince
+        5(4), 2 RODAS4, 3 DOP853.
     max_steps, max_events : int
         Limits on accepted steps and on logged events.
 
@@ -151,6 +156,9 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     counters = np.zeros(COUNT_SIZE, dtype=np.int64)
     work = np.empty((6, 3))
     stages = np.empty((6, 3))
+    k16 = np.empty((16, 3))
+    f7 = np.empty((7, 3))
+    err3 = np.empty(3)
     y = y_start.copy()
     y1 = np.empty(3)
     f = np.empty(3)
@@ -200,15 +208,25 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
                 break
             counters[COUNT_STATUS] = 2
             break
-        use_rosenbrock = method == 2 or (method == 0 and systems.stiff(system, mode, p))
-        if use_rosenbrock:
+        chosen = systems.preferred_method(system, mode, p) if method == 0 else method
+        if chosen == METHOD_ROSENBROCK:
+            kind = KIND_HERMITE
             counters[COUNT_RHS] += rosenbrock_step(system, t, y, f, h, mode, p, work, stages, y1, err)
             counters[COUNT_JACOBIANS] += 1
             order = 4.0
+            e = error_norm(y, y1, err, rtol, atol)
+        elif chosen == METHOD_DOP853:
+            kind = KIND_DOP853
+            counters[COUNT_RHS] += dop853_step(system, t, y, f, h, mode, p, k16, ytmp, y1, f1, err, err3)
+            order = 8.0
+            e = dop853_error_norm(y, y1, err, err3, h, rtol, atol)
         else:
+            kind = KIND_DP5
             counters[COUNT_RHS] += dormand_prince_step(system, t, y, f, h, mode, p, work, y1, f1, err)
             order = 5.0
-        e = error_norm(y, y1, err, rtol, atol)
+            e = error_norm(y, y1, err, rtol, atol)
+        dwork = f7 if kind == KIND_DOP853 else work
+        ready = kind != KIND_DOP853
         if not (e == e) or not np.isfinite(y1[0]) or not np.isfinite(y1[1]):
             counters[COUNT_REJECTED] += 1
             h *= 0.25
@@ -222,20 +240,22 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             continue
         # accepted
         counters[COUNT_ACCEPTED] += 1
-        if use_rosenbrock:
+        if kind == KIND_HERMITE:
             counters[COUNT_ROSENBROCK] += 1
             systems.rhs(system, t + h, y1, mode, p, f1)
             counters[COUNT_RHS] += 1
         else:
             counters[COUNT_EXPLICIT] += 1
         systems.guards(system, t + h, y1, p, g1, gr1)
-        # midpoint guards (shared by all guards), needed only by guards without a rate
-        dense(0.5, h, y, f, y1, f1, work, not use_rosenbrock, ymid)
         need_mid = False
         for k in range(NG):
             if systems.expected_sign(system, k, mode, p) != 0.0 and (math.isnan(gr[k]) or math.isnan(gr1[k])):
                 need_mid = True
         if need_mid:
+            if not ready:
+                counters[COUNT_RHS] += dop853_extend(system, t, y, h, y1, f1, mode, p, k16, ytmp, f7)
+                ready = True
+            dense(0.5, h, y, f, y1, f1, dwork, kind, ymid)
             systems.guards(system, t + 0.5 * h, ymid, p, gv, grv)
         else:
             for k in range(NG):
@@ -292,23 +312,29 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
                 elif tau == 1.0:
                     v = s * g1[k]
                 else:
-                    _guard_at(system, t, h, tau, y, f, y1, f1, work, not use_rosenbrock, p, ytmp, g_tmp, gr_tmp)
+                    if not ready:
+                        counters[COUNT_RHS] += dop853_extend(system, t, y, h, y1, f1, mode, p, k16, ytmp, f7)
+                        ready = True
+                    _guard_at(system, t, h, tau, y, f, y1, f1, dwork, kind, p, ytmp, g_tmp, gr_tmp)
                     v = s * g_tmp[k]
                 if v < 0.0:
                     found = tau
                     break
                 prev = tau
             if found > 0.0 and prev < tau_event:
-                tau_k = _locate(system, k, s, t, h, prev, found, y, f, y1, f1, work, not use_rosenbrock, p,
+                if not ready:
+                    counters[COUNT_RHS] += dop853_extend(system, t, y, h, y1, f1, mode, p, k16, ytmp, f7)
+                    ready = True
+                tau_k = _locate(system, k, s, t, h, prev, found, y, f, y1, f1, dwork, kind, p,
                                 ytmp, g_tmp, gr_tmp, counters)
                 if tau_k < tau_event:
                     tau_event = tau_k
                     k_event = k
         if k_event >= 0:
             t_new = t + tau_event * h
-            dense(tau_event, h, y, f, y1, f1, work, not use_rosenbrock, ytmp)
+            dense(tau_event, h, y, f, y1, f1, dwork, kind, ytmp)
             while i_out < n_out and t_out[i_out] <= t_new:
-                dense((t_out[i_out] - t) / h, h, y, f, y1, f1, work, not use_rosenbrock, yo)
+                dense((t_out[i_out] - t) / h, h, y, f, y1, f1, dwork, kind, yo)
                 for i in range(3):
                     y_out[i_out, i] = yo[i]
                 for i in range(MODE_SIZE):
@@ -318,8 +344,6 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
                 y[i] = ytmp[i]
             systems.guards(system, t_new, y, p, g, gr)
             monitor_max = max(monitor_max, systems.monitor(system, t_new, y, mode, p))
-            if tau_event > 0.5:
-                monitor_max = max(monitor_max, systems.monitor(system, t + 0.5 * h, ymid, mode, p))
             if n_events < max_events:
                 ev = events[n_events]
                 ev[0] = t_new
@@ -351,14 +375,16 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             monitor_max = systems.monitor(system, t, y, mode, p)
             h = max(h * tau_event, h * 0.1) if tau_event > 0.0 else h
         else:
+            if not ready and i_out < n_out and t_out[i_out] <= t + h:
+                counters[COUNT_RHS] += dop853_extend(system, t, y, h, y1, f1, mode, p, k16, ytmp, f7)
+                ready = True
             while i_out < n_out and t_out[i_out] <= t + h:
-                dense((t_out[i_out] - t) / h, h, y, f, y1, f1, work, not use_rosenbrock, ytmp)
+                dense((t_out[i_out] - t) / h, h, y, f, y1, f1, dwork, kind, ytmp)
                 for i in range(3):
                     y_out[i_out, i] = ytmp[i]
                 for i in range(MODE_SIZE):
                     mode_out[i_out, i] = mode[i]
                 i_out += 1
-            monitor_max = max(monitor_max, systems.monitor(system, t + 0.5 * h, ymid, mode, p))
             t = t_end if last else t + h
             for i in range(3):
                 y[i] = y1[i]

@@ -18,6 +18,7 @@ from camdyn.core.tableaus import (
     DP_A61, DP_A62, DP_A63, DP_A64, DP_A65, DP_B1, DP_B3, DP_B4, DP_B5, DP_B6,
     DP_C2, DP_C3, DP_C4, DP_C5, DP_E1, DP_E3, DP_E4, DP_E5, DP_E6, DP_E7, DP_P,
     RB_A, RB_C, RB_CC, RB_G, RB_GAMMA, RB_M, RB_STAGES,
+    D8_A, D8_B, D8_C, D8_D, D8_E3, D8_E5, D8_STAGES,
 )
 
 N = 3  # state size
@@ -46,15 +47,33 @@ def hermite(tau, h, y0, f0, y1, f1, out):
         out[i] = h00 * y0[i] + h10 * h * f0[i] + h01 * y1[i] + h11 * h * f1[i]
 
 
+KIND_DP5 = 0
+KIND_HERMITE = 1
+KIND_DOP853 = 2
+
+
 @numba.njit(cache=True)
-def dense(tau, h, y0, f0, y1, f1, work, explicit, out):
+def dense(tau, h, y0, f0, y1, f1, work, kind, out):
     """State at ``t + tau h`` inside the last step.
 
-    Dormand-Prince steps use their own 4th-order continuous extension (stages k2..k6
-    are still in ``work[1:6]``); Rosenbrock steps use the cubic Hermite interpolant.
+    Dormand-Prince 5(4) steps (``kind`` 0) use their own 4th-order continuous extension
+    (stages k2..k6 are still in ``work[1:6]``); Rosenbrock steps (1) the cubic Hermite
+    interpolant; DOP853 steps (2) their 7th-order extension, whose coefficients
+    :func:`dop853_extend` has put in ``work[0:7]``.
     """
-    if not explicit:
+    if kind == KIND_HERMITE:
         hermite(tau, h, y0, f0, y1, f1, out)
+        return
+    if kind == KIND_DOP853:
+        for i in range(N):
+            acc = 0.0
+            for j in range(6, -1, -1):   # nested form: ((F6 x + F5)(1 - x) + F4) x ...
+                acc += work[j, i]
+                if (6 - j) % 2 == 0:
+                    acc *= tau
+                else:
+                    acc *= 1.0 - tau
+            out[i] = y0[i] + acc
         return
     t2 = tau * tau
     t3 = t2 * tau
@@ -162,3 +181,76 @@ def rosenbrock_step(system, t, y, f0, h, mode, p, work, stages, y1, err):
         y1[i] = acc
         err[i] = stages[RB_STAGES - 1, i]
     return calls
+
+
+@numba.njit(cache=True)
+def dop853_step(system, t, y, f0, h, mode, p, k, yt, y1, f1, err5, err3):
+    """Explicit DOP853 step: 12 stages plus f(t + h, y1) into ``k[12]`` (``k`` is 16 x 3).
+
+    ``err5`` and ``err3`` receive the two embedded error estimates (without the factor h);
+    :func:`dop853_error_norm` combines them as Hairer's DOP853 does. ``yt`` is scratch.
+    """
+    for i in range(N):
+        k[0, i] = f0[i]
+    for s in range(1, D8_STAGES):
+        for i in range(N):
+            acc = 0.0
+            for j in range(s):
+                acc += D8_A[s, j] * k[j, i]
+            yt[i] = y[i] + h * acc
+        systems.rhs(system, t + D8_C[s] * h, yt, mode, p, k[s])
+    for i in range(N):
+        acc = 0.0
+        for j in range(D8_STAGES):
+            acc += D8_B[j] * k[j, i]
+        y1[i] = y[i] + h * acc
+    systems.rhs(system, t + h, y1, mode, p, f1)
+    for i in range(N):
+        k[D8_STAGES, i] = f1[i]
+        e5 = 0.0
+        e3 = 0.0
+        for j in range(D8_STAGES + 1):
+            e5 += D8_E5[j] * k[j, i]
+            e3 += D8_E3[j] * k[j, i]
+        err5[i] = e5
+        err3[i] = e3
+    return D8_STAGES
+
+
+@numba.njit(cache=True)
+def dop853_error_norm(y0, y1, err5, err3, h, rtol, atol):
+    """Scaled error norm of a DOP853 step (Hairer's combination of the 5th- and
+    3rd-order estimates), over the two dynamic components."""
+    e5 = 0.0
+    e3 = 0.0
+    for i in range(2):
+        sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
+        e5 += (err5[i] / sc) ** 2
+        e3 += (err3[i] / sc) ** 2
+    if e5 == 0.0 and e3 == 0.0:
+        return 0.0
+    return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * 2.0)
+
+
+@numba.njit(cache=True)
+def dop853_extend(system, t, y, h, y1, f1, mode, p, k, yt, out):
+    """Three extra stages and the 7 coefficient rows of DOP853's continuous extension
+    into ``out`` (7 x 3). Returns the number of right-hand-side calls."""
+    for s in range(D8_STAGES + 1, 16):
+        for i in range(N):
+            acc = 0.0
+            for j in range(s):
+                acc += D8_A[s, j] * k[j, i]
+            yt[i] = y[i] + h * acc
+        systems.rhs(system, t + D8_C[s] * h, yt, mode, p, k[s])
+    for i in range(N):
+        dy = y1[i] - y[i]
+        out[0, i] = dy
+        out[1, i] = h * k[0, i] - dy
+        out[2, i] = 2.0 * dy - h * (f1[i] + k[0, i])
+        for r in range(4):
+            acc = 0.0
+            for j in range(16):
+                acc += D8_D[r, j] * k[j, i]
+            out[3 + r, i] = h * acc
+    return 3

@@ -10,6 +10,9 @@ References
 ----------
 [1] J. R. Dormand, P. J. Prince, A family of embedded Runge-Kutta formulae,
     J. Comput. Appl. Math. 6 (1980) 19-26, doi:10.1016/0771-050X(80)90013-3.
+[3] E. Hairer, S. P. Norsett, G. Wanner, Solving Ordinary Differential Equations I:
+    Nonstiff Problems, 2nd ed., Springer (1993), section II.10,
+    doi:10.1007/978-3-540-78862-1.
 [2] E. Hairer, G. Wanner, Solving Ordinary Differential Equations II: Stiff and
     Differential-Algebraic Problems, 2nd ed., Springer (1996), section IV.7,
     doi:10.1007/978-3-642-05221-7.
@@ -39,6 +42,20 @@ DP_P = np.array([
     [0.0, -282668133 / 205662961, 2019193451 / 616988883, -1453857185 / 822651844],
     [0.0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423],
 ])
+
+# DOP853 [3]: explicit Runge-Kutta 8(5,3) with a 7th-order continuous extension (three
+# extra stages). The table is SciPy's transcription of Hairer's dop853.f, used as data.
+try:
+    from scipy.integrate._ivp import dop853_coefficients as _dop
+except ImportError as exc:  # pragma: no cover
+    raise ImportError("camdyn needs SciPy's DOP853 coefficient table (scipy>=1.11)") from exc
+D8_STAGES = _dop.N_STAGES                     # 12
+D8_A = np.ascontiguousarray(_dop.A, dtype=np.float64)   # (16, 16)
+D8_B = np.ascontiguousarray(_dop.B, dtype=np.float64)   # (12,)
+D8_C = np.ascontiguousarray(_dop.C, dtype=np.float64)   # (16,)
+D8_E3 = np.ascontiguousarray(_dop.E3, dtype=np.float64)  # (13,)
+D8_E5 = np.ascontiguousarray(_dop.E5, dtype=np.float64)  # (13,)
+D8_D = np.ascontiguousarray(_dop.D, dtype=np.float64)   # (4, 16)
 
 # RODAS4 [2]: 6-stage, order 4(3), L-stable and stiffly accurate Rosenbrock method, in
 # the form

@@ -20,7 +20,7 @@ import numba
 
 from camdyn.contact import contact_force
 from camdyn.friction import friction_coefficient
-from camdyn.geometry import cam_angle, contact_kinematics
+from camdyn.geometry import cam_angle, contact_kinematics, contact_kinematics_trig
 from camdyn.model import layout as L
 
 __all__ = ["spring_force", "spring_moment", "evaluate", "rhs", "guards"]
@@ -34,11 +34,16 @@ def spring_force(alpha, p):
     ``cos(alpha) / cos(alpha - sigma)`` for a spring tilted by ``sigma`` (our reading
     of the garbled eq 4.44).
     """
-    ca = math.cos(alpha)
-    comp = p[L.LS] - p[L.DY] + p[L.DX] * math.tan(alpha) + 0.5 * p[L.WIDTH] / ca
-    fs = p[L.KS] * comp
+    return spring_force_trig(math.cos(alpha), math.sin(alpha), p)
+
+
+@numba.njit(cache=True)
+def spring_force_trig(ca, sa, p):
+    """:func:`spring_force` from ``cos(alpha)`` and ``sin(alpha)``."""
+    inv_c = 1.0 / ca
+    fs = p[L.KS] * (p[L.LS] - p[L.DY] + (p[L.DX] * sa + 0.5 * p[L.WIDTH]) * inv_c)
     if p[L.TILT] != 0.0:
-        fs *= ca / math.cos(alpha - p[L.TILT])
+        fs *= ca / (ca * math.cos(p[L.TILT]) + sa * math.sin(p[L.TILT]))
     return fs
 
 
@@ -49,9 +54,15 @@ def spring_moment(alpha, fs, p):
     The force acts along ``(sin sigma, cos sigma)`` at the attachment point
     ``(dx, -(0.5 wb sec(alpha) + dx tan(alpha)))`` on the bar's lower face.
     """
+    return spring_moment_trig(math.cos(alpha), math.sin(alpha), fs, p)
+
+
+@numba.njit(cache=True)
+def spring_moment_trig(ca, sa, fs, p):
+    """:func:`spring_moment` from ``cos(alpha)`` and ``sin(alpha)``."""
     if p[L.TILT] == 0.0:
         return -fs * p[L.DX]
-    depth = 0.5 * p[L.WIDTH] / math.cos(alpha) + p[L.DX] * math.tan(alpha)
+    depth = (0.5 * p[L.WIDTH] + p[L.DX] * sa) / ca
     return -fs * (p[L.DX] * math.cos(p[L.TILT]) + depth * math.sin(p[L.TILT]))
 
 
@@ -76,10 +87,13 @@ def evaluate_shifted(t, alpha, alpha_dot, mode, p, delta_shift):
         delta_dot [m/s], vr [m/s], theta [rad], theta_dot [rad/s], P_cam [W], Fk [N])``
     """
     theta, theta_dot = cam_angle(t, p)
-    delta, delta_dot, chi, rho_c, vr, n_v, u_v = contact_kinematics(alpha, alpha_dot, theta, theta_dot, p)
+    ca = math.cos(alpha)
+    sa = math.sin(alpha)
+    delta, delta_dot, chi, rho_c, vr, n_v, u_v = contact_kinematics_trig(
+        ca, sa, math.cos(theta), math.sin(theta), alpha_dot, theta_dot, p)
     delta += delta_shift
-    fs = spring_force(alpha, p)
-    moment = p[L.MASS] * p[L.GRAVITY] * p[L.CG] * math.cos(alpha) + spring_moment(alpha, fs, p)
+    fs = spring_force_trig(ca, sa, p)
+    moment = p[L.MASS] * p[L.GRAVITY] * p[L.CG] * ca + spring_moment_trig(ca, sa, fs, p)
     fn = 0.0
     ff = 0.0
     fk = 0.0
@@ -101,8 +115,10 @@ def rhs(t, y, mode, p, dydt):
         dydt[1] = res[0]
         dydt[2] = res[10]
     else:  # free flight: no geometry needed
-        fs = spring_force(alpha, p)
-        m = p[L.MASS] * p[L.GRAVITY] * p[L.CG] * math.cos(alpha) + spring_moment(alpha, fs, p)
+        ca = math.cos(alpha)
+        sa = math.sin(alpha)
+        fs = spring_force_trig(ca, sa, p)
+        m = p[L.MASS] * p[L.GRAVITY] * p[L.CG] * ca + spring_moment_trig(ca, sa, fs, p)
         dydt[1] = m / p[L.INERTIA]
         dydt[2] = 0.0
     dydt[0] = y[1]
