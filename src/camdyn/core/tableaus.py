@@ -45,10 +45,28 @@ DP_P = np.array([
 
 # DOP853 [3]: explicit Runge-Kutta 8(5,3) with a 7th-order continuous extension (three
 # extra stages). The table is SciPy's transcription of Hairer's dop853.f, used as data.
-try:
-    from scipy.integrate._ivp import dop853_coefficients as _dop
-except ImportError as exc:  # pragma: no cover
-    raise ImportError("camdyn needs SciPy's DOP853 coefficient table (scipy>=1.11)") from exc
+
+
+def _load_dop853_table():
+    """SciPy's DOP853 coefficient module, loaded from its file so that importing camdyn
+    does not import all of scipy.integrate (a quarter of a second)."""
+    import importlib.util
+    import os
+
+    spec = importlib.util.find_spec("scipy")
+    if spec is None or not spec.submodule_search_locations:
+        raise ImportError("camdyn needs SciPy (scipy>=1.11)")
+    path = os.path.join(list(spec.submodule_search_locations)[0], "integrate", "_ivp", "dop853_coefficients.py")
+    if not os.path.isfile(path):  # pragma: no cover - a SciPy that moved the table
+        from scipy.integrate._ivp import dop853_coefficients
+        return dop853_coefficients
+    module_spec = importlib.util.spec_from_file_location("_camdyn_dop853_coefficients", path)
+    module = importlib.util.module_from_spec(module_spec)
+    module_spec.loader.exec_module(module)
+    return module
+
+
+_dop = _load_dop853_table()
 D8_STAGES = _dop.N_STAGES                     # 12
 D8_A = np.ascontiguousarray(_dop.A, dtype=np.float64)   # (16, 16)
 D8_B = np.ascontiguousarray(_dop.B, dtype=np.float64)   # (12,)
