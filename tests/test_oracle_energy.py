@@ -59,3 +59,34 @@ def test_energy_is_conserved_without_damping_or_friction(impact_rig):
     total = kinetic + v_spring + v_gravity + v_contact - ds.cam_work.values
     swing = np.ptp(kinetic)
     assert np.ptp(total) < 1e-6 * swing, np.ptp(total) / swing
+
+
+def test_elliptic_cam_agrees_with_scipy(friction_rig):
+    # table 4.7's elliptic cams: b/a = 0.8, e/a = 0.1, 8.33 Hz
+    s = friction_rig.with_values(**{"cam.semi_minor": 0.8 * friction_rig.cam.semi_major})
+    ds, ref, _ = compare_with_reference(s, 1.5, 8.33)
+    scale = np.max(np.abs(ref[0]))
+    np.testing.assert_allclose(ds.alpha.values, ref[0], rtol=0, atol=1e-6 * scale)
+
+
+def test_line_contact_centre_pivot_agrees_with_scipy(standin_rig):
+    # chapter 2 layout: pivot at the centre of gravity, line contact on the bar face
+    ds, ref, _ = compare_with_reference(standin_rig, 0.1, 2.5)  # 40 ms: the 5 kHz contact mode is costly for SciPy
+    scale = np.max(np.abs(ref[0]))
+    np.testing.assert_allclose(ds.alpha.values, ref[0], rtol=0, atol=1e-6 * scale)
+
+
+def test_oscillating_cam_agrees_with_scipy(friction_rig):
+    # tanh friction: the oscillating cam reverses the sliding velocity, and the SciPy
+    # model would otherwise spend minutes on Coulomb switching events
+    s = friction_rig.with_values(**{"motion.kind": "oscillating", "motion.amplitude": 0.6,
+                                    "motion.frequency": 3.0, "friction.law": "tanh"})
+    prep = prepare(s)
+    ds = camdyn.simulate(s, revolutions=0.12, sample_rate=20e3, rtol=1e-11, atol=1e-13)
+    t = ds.time.values
+    _, ref, _ = reference_simulate(s, prep.theta0, prep.y0, t[-1], t, prep.viscous_c, method="DOP853",
+                                   rtol=1e-12, atol=1e-14)
+    scale = np.max(np.abs(ref[0]))
+    np.testing.assert_allclose(ds.alpha.values, ref[0], rtol=0, atol=1e-6 * scale)
+    # the cam angle follows Theta0 + 0.5 Theta_p sin(omega_c t)
+    np.testing.assert_allclose(ds.cam_angle.values, prep.theta0 + 0.3 * np.sin(2 * np.pi * 3.0 * t), atol=1e-12)

@@ -144,13 +144,23 @@ def reference_simulate(system: System, theta0: float, y0, t_end: float, t_eval, 
     out = np.full((3, t_eval.size), np.nan)
     nfev = 0
     n_events = 0
+    segments = 0
     while t < t_end:
-        def on_delta(tt, yy):
+        segments += 1
+        if segments > 100_000:
+            raise RuntimeError("reference model: too many event segments (sticking?)")
+        t_quiet = t + 1e-12 * max(1.0, t)  # no event at the very start of a segment
+
+        def on_delta(tt, yy, t_quiet=t_quiet, contact=contact):
+            if tt <= t_quiet:
+                return 1.0 if contact else -1.0
             return model.geometry(tt, yy[0], yy[1])[0]
         on_delta.terminal = True
         on_delta.direction = -1 if contact else 1
 
-        def on_vr(tt, yy):
+        def on_vr(tt, yy, t_quiet=t_quiet, slip=slip):
+            if tt <= t_quiet:
+                return slip
             return model.geometry(tt, yy[0], yy[1])[4]
         on_vr.terminal = True
         on_vr.direction = -slip

@@ -146,7 +146,7 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
         if not np.all(np.isfinite(y0)):
             raise ParameterError("initial_state must be finite")
     n_out = int(math.floor(duration * sample_rate + 1e-9)) + 1
-    t_out = np.arange(n_out) / sample_rate
+    t_out = np.minimum(np.arange(n_out) / sample_rate, duration)  # the last sample may round past the end
     if max_step is None:
         max_step = period / 32.0 if math.isfinite(period) else duration / 64.0
     max_events = int(64 + 16 * (duration / period if math.isfinite(period) else 100))
