@@ -65,7 +65,12 @@ def plot_spectrum(ds: xr.Dataset, path: str | Path, variable: str = "alpha_ddot"
             ax.axvline(k * speed, color="0.8", lw=0.5, zorder=0)
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel(f"|{variable}| [{ds[variable].attrs.get('units', '-')}]")
-    ax.set_xlim(0, min(freq[-1], 40 * speed if speed else freq[-1]))
+    fn = float(ds.attrs.get("natural_frequency_Hz", 0.0) or 0.0)
+    if fn == fn and fn > 0:
+        ax.axvline(fn, color="C3", lw=0.8, ls="--", label=f"linearized natural frequency {fn:.0f} Hz")
+        ax.legend(loc="upper right", fontsize=8)
+    upper = max(40 * speed, 1.5 * fn if fn == fn else 0.0) if speed else freq[-1]
+    ax.set_xlim(0, min(freq[-1], upper))
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

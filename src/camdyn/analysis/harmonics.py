@@ -41,7 +41,8 @@ def harmonic_amplitudes(ds: xr.Dataset, variable: str = "alpha_ddot", orders=(1,
 
 
 def amplitude_spectrum(ds: xr.Dataset, variable: str = "alpha_ddot", revolutions: int | None = None):
-    """Single-sided amplitude spectrum (frequency [Hz], amplitude) over whole revolutions."""
+    """Single-sided amplitude spectrum (frequency [Hz], amplitude [unit of the variable])
+    over whole revolutions, Hann-windowed (amplitude-corrected) against leakage."""
     speed = float(ds.attrs["speed_hz"])
     t = ds["time"].values
     total = (t[-1] - t[0]) * speed
@@ -49,6 +50,7 @@ def amplitude_spectrum(ds: xr.Dataset, variable: str = "alpha_ddot", revolutions
     win = steady_window(ds, revs, speed)
     x = win[variable].values - np.mean(win[variable].values)
     fs = 1.0 / (t[1] - t[0])
-    amp = 2.0 * np.abs(np.fft.rfft(x)) / x.size
+    window = np.hanning(x.size)
+    amp = 2.0 * np.abs(np.fft.rfft(x * window)) / window.sum()
     freq = np.fft.rfftfreq(x.size, 1.0 / fs)
     return freq, amp
