@@ -159,6 +159,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     k16 = np.empty((16, 3))
     f7 = np.empty((7, 3))
     err3 = np.empty(3)
+    h_regime = np.zeros(2)
     y = y_start.copy()
     y1 = np.empty(3)
     f = np.empty(3)
@@ -374,6 +375,10 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             counters[COUNT_RHS] += 1
             monitor_max = systems.monitor(system, t, y, mode, p)
             h = max(h * tau_event, h * 0.1) if tau_event > 0.0 else h
+            # a contact is far faster than free flight: start from this regime's last step
+            r_new = systems.regime(system, mode, p)
+            if h_regime[r_new] > 0.0:
+                h = min(h, h_regime[r_new])
         else:
             if not ready and i_out < n_out and t_out[i_out] <= t + h:
                 counters[COUNT_RHS] += dop853_extend(system, t, y, h, y1, f1, mode, p, k16, ytmp, f7)
@@ -393,6 +398,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
                 g[i] = g1[i]
                 gr[i] = gr1[i]
             monitor_max = max(monitor_max, systems.monitor(system, t, y, mode, p))
+            h_regime[systems.regime(system, mode, p)] = h
             factor = 0.9 * e ** (-1.0 / order) if e > 0.0 else 5.0
             h *= min(5.0, max(0.2, factor))
     return y_out, mode_out, events[:n_events].copy(), counters

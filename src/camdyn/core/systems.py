@@ -128,6 +128,15 @@ def initial_mode(system, t, y, p, mode):
 
 
 @numba.njit(cache=True)
+def regime(system, mode, p):
+    """Index (0 or 1) of the dynamic regime of a mode; the driver remembers the last step
+    size of each regime, so that a step after an event starts at the right scale."""
+    if system == CAM_FOLLOWER:
+        return 1 if mode[L.MODE_CONTACT] > 0.5 else 0
+    return 0
+
+
+@numba.njit(cache=True)
 def preferred_method(system, mode, p):
     """Stepper for automatic selection: 1 Dormand-Prince 5(4), 2 RODAS4, 3 DOP853."""
     if system == CAM_FOLLOWER:
