@@ -16,7 +16,6 @@ from __future__ import annotations
 import math
 
 import numba
-import numpy as np
 
 from camdyn.errors import GeometryError
 from camdyn.model import layout as L
@@ -183,15 +182,3 @@ def zero_state(system) -> tuple[float, float]:
     a0 = math.asin(rhs / r) - phase             # the root with the bar nearest horizontal
     theta0 = math.pi / 2 - a0 if c.is_circle else -a0
     return a0, theta0
-
-
-def contact_point_array(alpha: np.ndarray, theta: np.ndarray, p: np.ndarray):
-    """Vectorised :func:`contact_point` for NumPy arrays (for analysis, not the hot loop)."""
-    alpha = np.asarray(alpha, float)
-    theta = np.broadcast_to(np.asarray(theta, float), alpha.shape)
-    out = np.empty((5,) + alpha.shape)
-    flat_a, flat_t = alpha.ravel(), theta.ravel()
-    res = out.reshape(5, -1)
-    for i in range(flat_a.size):
-        res[:, i] = contact_point(flat_a[i], flat_t[i], p)
-    return out

@@ -398,10 +398,6 @@ class System:
                 f"the cam pivot ({self.cam.pivot_x*1e3:g}, {self.cam.pivot_y*1e3:g}) mm lies inside "
                 f"the follower's contact surface offset ({h*1e3:g} mm)")
 
-    def replace(self, **changes) -> "System":
-        """Return a copy with whole sub-dataclasses replaced."""
-        return replace(self, **changes)
-
     def with_values(self, **dotted) -> "System":
         """Return a copy with SI values changed by dotted key, e.g. ``with_values(**{"cam.runout": 3.5e-3})``."""
         groups: dict[str, dict] = {}

@@ -16,6 +16,15 @@ def _label(da: xr.DataArray) -> str:
     return f"{da.attrs.get('long_name', da.name)} [{da.attrs.get('units', '-')}]"
 
 
+def _save(fig, path) -> Path:
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def plot_time_history(ds: xr.Dataset, path: str | Path, revolutions: float = 3.0) -> Path:
     """Plot alpha, alpha_ddot, the contact force and the pivot reactions over the last
     ``revolutions`` cam periods; write a PNG to ``path``."""
@@ -44,12 +53,7 @@ def plot_time_history(ds: xr.Dataset, path: str | Path, revolutions: float = 3.0
                 for ax in axes:
                     ax.axvline(ti, color="0.8", lw=0.5, zorder=0)
     fig.suptitle(ds.attrs.get("title", "camdyn simulation"))
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
 
 
 def plot_spectrum(ds: xr.Dataset, path: str | Path, variable: str = "alpha_ddot",
@@ -71,9 +75,4 @@ def plot_spectrum(ds: xr.Dataset, path: str | Path, variable: str = "alpha_ddot"
         ax.legend(loc="upper right", fontsize=8)
     upper = max(40 * speed, 1.5 * fn if fn == fn else 0.0) if speed else freq[-1]
     ax.set_xlim(0, min(freq[-1], upper))
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(fig, path)

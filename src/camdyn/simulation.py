@@ -8,7 +8,7 @@ import time as _time
 import numpy as np
 import xarray as xr
 
-from camdyn.config import flatten, system_to_toml
+from camdyn.config import system_to_toml
 from camdyn.core import driver, systems
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.geometry import zero_state
@@ -205,9 +205,3 @@ def _dataset(system, prep, t, y, modes, events, counters, elapsed, rtol, atol, m
         attrs[f"solver_{name}"] = int(counters[i])
     ds.attrs.update(attrs)
     return ds
-
-
-def parameters_of(ds: xr.Dataset) -> dict:
-    """Dotted-key parameters recorded in a result (as written by :func:`simulate`)."""
-    import tomllib
-    return flatten(tomllib.loads(ds.attrs["parameters_toml"]))

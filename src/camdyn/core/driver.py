@@ -79,6 +79,20 @@ def _guard_at(system, t, h, tau, y0, f0, y1, f1, work, kind, p, ytmp, vals, rate
 
 
 @numba.njit(cache=True)
+def _sample(t, h, t_stop, i_out, t_out, y0, f0, y1, f1, work, kind, mode, scratch, y_out, mode_out):
+    """Fill the output times in (t, t_stop] of the current step; return the next index."""
+    n_out = t_out.shape[0]
+    while i_out < n_out and t_out[i_out] <= t_stop:
+        dense((t_out[i_out] - t) / h, h, y0, f0, y1, f1, work, kind, scratch)
+        for i in range(3):
+            y_out[i_out, i] = scratch[i]
+        for i in range(MODE_SIZE):
+            mode_out[i_out, i] = mode[i]
+        i_out += 1
+    return i_out
+
+
+@numba.njit(cache=True)
 def _locate(system, k, sign, t, h, ta, tb, y0, f0, y1, f1, work, kind, p, ytmp, vals, rates, counters):
     """Illinois iteration for the crossing of guard ``k`` in (ta, tb] (fractions of h).
 
@@ -334,13 +348,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
         if k_event >= 0:
             t_new = t + tau_event * h
             dense(tau_event, h, y, f, y1, f1, dwork, kind, ytmp)
-            while i_out < n_out and t_out[i_out] <= t_new:
-                dense((t_out[i_out] - t) / h, h, y, f, y1, f1, dwork, kind, yo)
-                for i in range(3):
-                    y_out[i_out, i] = yo[i]
-                for i in range(MODE_SIZE):
-                    mode_out[i_out, i] = mode[i]
-                i_out += 1
+            i_out = _sample(t, h, t_new, i_out, t_out, y, f, y1, f1, dwork, kind, mode, yo, y_out, mode_out)
             for i in range(3):
                 y[i] = ytmp[i]
             systems.guards(system, t_new, y, p, g, gr)
@@ -383,13 +391,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             if not ready and i_out < n_out and t_out[i_out] <= t + h:
                 counters[COUNT_RHS] += dop853_extend(system, t, y, h, y1, f1, mode, p, k16, ytmp, f7)
                 ready = True
-            while i_out < n_out and t_out[i_out] <= t + h:
-                dense((t_out[i_out] - t) / h, h, y, f, y1, f1, dwork, kind, ytmp)
-                for i in range(3):
-                    y_out[i_out, i] = ytmp[i]
-                for i in range(MODE_SIZE):
-                    mode_out[i_out, i] = mode[i]
-                i_out += 1
+            i_out = _sample(t, h, t + h, i_out, t_out, y, f, y1, f1, dwork, kind, mode, yo, y_out, mode_out)
             t = t_end if last else t + h
             for i in range(3):
                 y[i] = y1[i]

@@ -184,6 +184,17 @@ def rosenbrock_step(system, t, y, f0, h, mode, p, work, stages, y1, err):
 
 
 @numba.njit(cache=True)
+def _dop853_stage(system, t, y, h, s, mode, p, k, yt):
+    """Stage ``s`` of DOP853 (steps and continuous extension alike) into ``k[s]``."""
+    for i in range(N):
+        acc = 0.0
+        for j in range(s):
+            acc += D8_A[s, j] * k[j, i]
+        yt[i] = y[i] + h * acc
+    systems.rhs(system, t + D8_C[s] * h, yt, mode, p, k[s])
+
+
+@numba.njit(cache=True)
 def dop853_step(system, t, y, f0, h, mode, p, k, yt, y1, f1, err5, err3):
     """Explicit DOP853 step: 12 stages plus f(t + h, y1) into ``k[12]`` (``k`` is 16 x 3).
 
@@ -193,12 +204,7 @@ def dop853_step(system, t, y, f0, h, mode, p, k, yt, y1, f1, err5, err3):
     for i in range(N):
         k[0, i] = f0[i]
     for s in range(1, D8_STAGES):
-        for i in range(N):
-            acc = 0.0
-            for j in range(s):
-                acc += D8_A[s, j] * k[j, i]
-            yt[i] = y[i] + h * acc
-        systems.rhs(system, t + D8_C[s] * h, yt, mode, p, k[s])
+        _dop853_stage(system, t, y, h, s, mode, p, k, yt)
     for i in range(N):
         acc = 0.0
         for j in range(D8_STAGES):
@@ -237,12 +243,7 @@ def dop853_extend(system, t, y, h, y1, f1, mode, p, k, yt, out):
     """Three extra stages and the 7 coefficient rows of DOP853's continuous extension
     into ``out`` (7 x 3). Returns the number of right-hand-side calls."""
     for s in range(D8_STAGES + 1, 16):
-        for i in range(N):
-            acc = 0.0
-            for j in range(s):
-                acc += D8_A[s, j] * k[j, i]
-            yt[i] = y[i] + h * acc
-        systems.rhs(system, t + D8_C[s] * h, yt, mode, p, k[s])
+        _dop853_stage(system, t, y, h, s, mode, p, k, yt)
     for i in range(N):
         dy = y1[i] - y[i]
         out[0, i] = dy
