@@ -35,3 +35,11 @@ class PresetError(CamdynError, LookupError):
 
 class SimulationError(CamdynError, RuntimeError):
     """The integrator could not complete a simulation (step-size underflow, too many steps)."""
+
+
+class DataError(CamdynError, ValueError):
+    """A measurement file cannot be read or its samples are unusable (gaps, NaN, clipping)."""
+
+
+class IdentificationError(CamdynError, RuntimeError):
+    """An estimator refuses a record: its assumptions fail, or it has too little information."""

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import xarray as xr
 
 from camdyn.errors import ParameterError
 
-__all__ = ["harmonic_amplitudes", "amplitude_spectrum", "steady_window"]
+__all__ = ["harmonic_amplitudes", "amplitude_spectrum", "steady_window", "fit_harmonics", "synthesize_harmonics",
+           "estimate_speed"]
 
 
 def steady_window(ds: xr.Dataset, revolutions: float, speed: float | None = None) -> xr.Dataset:
@@ -54,3 +57,85 @@ def amplitude_spectrum(ds: xr.Dataset, variable: str = "alpha_ddot", revolutions
     amp = 2.0 * np.abs(np.fft.rfft(x * window)) / window.sum()
     freq = np.fft.rfftfreq(x.size, 1.0 / fs)
     return freq, amp
+
+
+def fit_harmonics(time: np.ndarray, signal: np.ndarray, frequency: float, order: int) -> np.ndarray:
+    """Complex amplitudes of the cam harmonics 0..``order`` by linear least squares.
+
+    ``signal(t) ~ Re(sum_k c_k exp(i 2 pi k f t))`` with ``c_0`` the mean. Unlike an FFT
+    bin, the fit sits exactly on each harmonic whatever the record length, so a record
+    cut to whole revolutions (to within a sample) has no leakage between harmonics.
+
+    Parameters
+    ----------
+    time : ndarray
+        Sample times [s].
+    signal : ndarray
+        Samples [any unit]; the amplitudes come out in the same unit.
+    frequency : float
+        Fundamental (cam) frequency [Hz].
+    order : int
+        Highest harmonic [-].
+    """
+    phase = 2.0 * np.pi * frequency * (time - time[0])
+    k = np.arange(1, order + 1)
+    arg = np.outer(phase, k)
+    design = np.hstack([np.ones((time.size, 1)), np.cos(arg), -np.sin(arg)])
+    coef, *_ = np.linalg.lstsq(design, signal, rcond=None)
+    out = np.empty(order + 1, dtype=complex)
+    out[0] = coef[0]
+    out[1:] = coef[1:order + 1] + 1j * coef[order + 1:]
+    # referred to t = 0 rather than the first sample
+    shift = np.exp(-1j * 2.0 * np.pi * frequency * time[0] * np.arange(order + 1))
+    return out * shift
+
+
+def synthesize_harmonics(coefficients: np.ndarray, frequency: float, time: np.ndarray) -> np.ndarray:
+    """Evaluate ``Re(sum_k c_k exp(i 2 pi k f t))`` at ``time`` [s]."""
+    k = np.arange(coefficients.size)
+    return np.real(np.exp(1j * 2.0 * np.pi * frequency * np.outer(time, k)) @ coefficients)
+
+
+def estimate_speed(time: np.ndarray, signal: np.ndarray, lowest: float = 0.5, highest: float | None = None) -> float:
+    """Fundamental frequency [Hz] of a periodic record (the cam speed).
+
+    The strongest peak of the Hann-windowed, zero-padded spectrum is refined by
+    minimising the residual of a 5-harmonic least-squares fit. A cam whose higher
+    harmonic dominates (an ellipse turns twice per revolution) would be mistaken for a
+    faster one, so the sub-multiples ``f_peak / k`` (k <= 6) are tried too: the
+    fundamental is the smallest ``k`` whose harmonic fit (up to the same frequency)
+    leaves a residual within 1.5 times the best of them.
+    """
+    from scipy.optimize import minimize_scalar
+
+    time = np.asarray(time, float)
+    x = np.asarray(signal, float) - np.mean(signal)
+    dt = time[1] - time[0]
+    n = x.size
+    pad = 1 << int(math.ceil(math.log2(4 * n)))
+    amp = np.abs(np.fft.rfft(x * np.hanning(n), pad))
+    freq = np.fft.rfftfreq(pad, dt)
+    band = (freq >= lowest) & (freq <= (highest or freq[-1]))
+    if not band.any():
+        raise ParameterError("no frequencies in the search band for the cam speed")
+    idx = np.nonzero(band)[0]
+    peak = freq[idx[np.argmax(amp[idx])]]
+    resolution = 1.0 / (n * dt)
+    if peak * n * dt < 2:
+        raise ParameterError(f"the record is too short to find the cam speed: it holds {peak * n * dt:.2f} "
+                             "periods of its strongest component")
+
+    def residual(f, order):
+        c = fit_harmonics(time, x, f, order)
+        return float(np.sum((x - synthesize_harmonics(c, f, time - time[0])) ** 2))
+
+    nyquist = 0.45 / dt
+    res = minimize_scalar(lambda f: residual(f, max(1, min(5, int(nyquist / f)))),
+                          bounds=(peak - resolution, peak + resolution), method="bounded",
+                          options={"xatol": 1e-9 * peak})
+    peak = float(res.x)
+    trials = [(k, residual(peak / k, max(1, min(3 * k, int(nyquist * k / peak)))))
+              for k in range(1, 7) if peak / k >= lowest]
+    best = min(r for _, r in trials)
+    k = min(k for k, r in trials if r <= 1.5 * best)
+    return peak / k

@@ -9,7 +9,7 @@ import numpy as np
 
 from camdyn.geometry import contact_point_rate
 from camdyn.model import layout as L
-from camdyn.model.dynamics import evaluate
+from camdyn.model.dynamics import evaluate, spring_force_trig
 
 #: name, unit, long name of each derived channel, in column order.
 CHANNELS = (
@@ -32,12 +32,37 @@ CHANNELS = (
 
 
 @numba.njit(cache=True)
+def pivot_reaction(alpha, alpha_dot, alpha_ddot, fn, ff, fs, p):
+    """Pivot reaction ``(Nx, Ny)`` [N] on the follower from Newton's law for its centre of gravity.
+
+    ``N = m a_G + Fn n - Ff u - Fs (sin sigma, cos sigma) + m g e_y`` with
+    ``a_G = -l_cg (alpha_ddot n + alpha_dot^2 u)`` (eqs 4.27-4.28, 4.45-4.46).
+
+    Parameters
+    ----------
+    alpha, alpha_dot, alpha_ddot : float
+        Follower angle [rad], rate [rad/s] and acceleration [rad/s^2].
+    fn, ff, fs : float
+        Normal contact, friction and spring forces [N].
+    """
+    m = p[L.MASS]
+    lcg = p[L.CG]
+    ca = math.cos(alpha)
+    sa = math.sin(alpha)
+    agx = -lcg * (alpha_ddot * sa + alpha_dot * alpha_dot * ca)
+    agy = -lcg * (alpha_ddot * ca - alpha_dot * alpha_dot * sa)
+    st = math.sin(p[L.TILT])
+    ct = math.cos(p[L.TILT])
+    nx = m * agx + fn * sa - ff * ca - fs * st
+    ny = m * agy + fn * ca + ff * sa - fs * ct + m * p[L.GRAVITY]
+    return nx, ny
+
+
+@numba.njit(cache=True)
 def derived(t, y, modes, p):
     """Channels of :data:`CHANNELS` for samples ``t`` [s], states ``y`` (n, 3), modes (n, 4)."""
     n = t.shape[0]
     out = np.full((n, len(CHANNELS)), np.nan)
-    m = p[L.MASS]
-    lcg = p[L.CG]
     for i in range(n):
         if math.isnan(y[i, 0]):
             continue
@@ -49,15 +74,7 @@ def derived(t, y, modes, p):
         chi_dot = contact_point_rate(alpha, ad, theta, theta_dot, p)
         ub = -chi_dot
         ve = vr + 2.0 * ub
-        ca = math.cos(alpha)
-        sa = math.sin(alpha)
-        # N = m a_G + Fn n - Ff u - Fs (sin sigma, cos sigma) + m g y,  a_G = -l (alpha_ddot n + alpha_dot^2 u)
-        agx = -lcg * (acc * sa + ad * ad * ca)
-        agy = -lcg * (acc * ca - ad * ad * sa)
-        st = math.sin(p[L.TILT])
-        ct = math.cos(p[L.TILT])
-        nx = m * agx + fn * sa - ff * ca - fs * st
-        ny = m * agy + fn * ca + ff * sa - fs * ct + m * p[L.GRAVITY]
+        nx, ny = pivot_reaction(alpha, ad, acc, fn, ff, fs, p)
         row = out[i]
         row[0] = acc
         row[1] = delta
@@ -75,3 +92,37 @@ def derived(t, y, modes, p):
         row[13] = theta_dot
         row[14] = mode[L.MODE_CONTACT]
     return out
+
+
+@numba.njit(cache=True)
+def contact_forces_from_reaction(alpha, alpha_dot, alpha_ddot, nx, ny, p):
+    """Normal and friction force ``(Fn, Ff)`` [N] from a measured pivot reaction: the
+    inverse of :func:`pivot_reaction` (eqs 4.29-4.30, with the centripetal term and the
+    spring tilt kept), vectorised over samples.
+
+    Parameters
+    ----------
+    alpha, alpha_dot, alpha_ddot : ndarray
+        Follower angle [rad], rate [rad/s] and acceleration [rad/s^2].
+    nx, ny : ndarray
+        Pivot reaction on the follower [N].
+    """
+    n = alpha.size
+    fn = np.empty(n)
+    ff = np.empty(n)
+    m = p[L.MASS]
+    lcg = p[L.CG]
+    st = math.sin(p[L.TILT])
+    ct = math.cos(p[L.TILT])
+    for i in range(n):
+        ca = math.cos(alpha[i])
+        sa = math.sin(alpha[i])
+        ad2 = alpha_dot[i] * alpha_dot[i]
+        agx = -lcg * (alpha_ddot[i] * sa + ad2 * ca)
+        agy = -lcg * (alpha_ddot[i] * ca - ad2 * sa)
+        fs = spring_force_trig(ca, sa, p)
+        a = nx[i] - m * agx + fs * st
+        b = ny[i] - m * agy + fs * ct - m * p[L.GRAVITY]
+        fn[i] = a * sa + b * ca
+        ff[i] = -a * ca + b * sa
+    return fn, ff

@@ -1,0 +1,287 @@
+"""Coefficient of friction from the Fourier amplitudes of pivot forces and acceleration
+(thesis 4.6, eqs 4.29-4.40; MODEL.md §6).
+
+The force transducers at the pivot do not measure DC, so the mean pivot reaction
+``(Nx_dc, Ny_dc)`` is unknown. The measured ``Nx``, ``Ny`` and ``alpha_ddot`` are fitted
+by their cam harmonics over whole revolutions; the follower angle is rebuilt by
+integrating ``alpha_ddot`` harmonic by harmonic, around the mean angle that inverse
+kinematics gives. The force balance on the follower (the inverse of the pivot reaction,
+eqs 4.29-4.30) then gives the normal and friction forces as functions of time that are
+linear in the unknown DC reactions. With Coulomb friction and one sliding direction
+``s = sgn(vr)``, ``Ff = s mu Fn`` holds at every instant; its DC part (eq 4.38) and its
+complex first harmonic (eqs 4.39-4.40) are three real equations in
+``(mu, Nx_dc, Ny_dc)``, solved by Levenberg-Marquardt.
+
+``harmonics`` sets how many cam harmonics of each measured signal enter the products
+of the force balance: 1 is the thesis's truncation (each signal rebuilt from its DC and
+first harmonic); the default keeps 20, which removes the truncation error the thesis
+reports (tables 4.5-4.7) because products of signals then keep their cross-harmonic
+terms.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+import xarray as xr
+from scipy.optimize import least_squares
+
+from camdyn.analysis.harmonics import estimate_speed, fit_harmonics
+from camdyn.analysis.kinematics import check_regime, inverse_kinematics
+from camdyn.errors import IdentificationError, ParameterError
+from camdyn.io.measurements import angular_acceleration, check_record
+from camdyn.model import layout as L
+from camdyn.model.outputs import contact_forces_from_reaction
+from camdyn.parameters import System
+
+__all__ = ["FrictionEstimate", "estimate_friction"]
+
+#: Fraction of the acceleration's variance the cam harmonics must explain [-].
+PERIODIC_FRACTION = 0.9
+#: Samples per revolution of the reconstructed signals [-].
+GRID = 1024
+
+
+@dataclass(frozen=True)
+class FrictionEstimate:
+    """Result of :func:`estimate_friction`.
+
+    Attributes
+    ----------
+    mu : float
+        Coefficient of friction [-].
+    Nx_dc, Ny_dc : float
+        Mean pivot reactions on the follower [N].
+    speed_hz : float
+        Cam speed used [Hz]; ``speed_source`` says whether it was given or estimated.
+    residual : float
+        Norm of the three equations at the solution over ``|Fn_1|`` [-].
+    coulomb_misfit : float
+        rms of ``Ff - s mu Fn`` over the rebuilt revolution, over the rms of ``Fn`` [-]:
+        how well one Coulomb coefficient explains the whole waveform, not just the
+        harmonics used.
+    revolutions : int
+        Whole cam revolutions analysed [-].
+    harmonics : int
+        Cam harmonics per signal in the force balance [-].
+    sliding_sign : int
+        ``sgn(vr)`` from inverse kinematics [-].
+    amplitudes : dict
+        DC and complex first-harmonic amplitudes [N, rad/s^2] as ``[re, im]`` pairs.
+    checks : dict
+        Each assumption: ``{"passed": bool, "detail": str}``; a check marked
+        ``"enforced": False`` is advisory and does not refuse the estimate.
+    """
+
+    mu: float
+    Nx_dc: float
+    Ny_dc: float
+    speed_hz: float
+    speed_source: str
+    residual: float
+    coulomb_misfit: float
+    revolutions: int
+    harmonics: int
+    sliding_sign: int
+    amplitudes: dict = field(default_factory=dict)
+    checks: dict = field(default_factory=dict)
+
+    @property
+    def accepted(self) -> bool:
+        """True when every check passed."""
+        return all(c["passed"] for c in self.checks.values() if c.get("enforced", True))
+
+    def to_dict(self) -> dict:
+        """JSON-ready dictionary (units in the keys' documentation above)."""
+        out = asdict(self)
+        out["accepted"] = self.accepted
+        return out
+
+
+def _project(x: np.ndarray) -> tuple[float, complex]:
+    """DC and complex first-harmonic amplitude of one revolution sampled uniformly."""
+    phase = np.exp(-2j * np.pi * np.arange(x.size) / x.size)
+    return float(np.mean(x)), complex(2.0 * np.mean(x * phase))
+
+
+def _rebuild(coef: np.ndarray, orders: int, omega: float, grid: int):
+    """Signal, its integral and double integral (AC parts) over one revolution from the
+    complex harmonics ``coef[1..orders]``."""
+    k = np.arange(1, orders + 1)
+    phase = np.exp(1j * np.outer(2 * np.pi * np.arange(grid) / grid, k))
+    c = coef[1:orders + 1]
+    value = np.real(phase @ c)
+    first = np.real(phase @ (c / (1j * k * omega)))
+    second = np.real(phase @ (-c / (k * omega) ** 2))
+    return value, first, second
+
+
+def _harmonic_check(name: str, x: np.ndarray, coef: np.ndarray, t: np.ndarray, speed: float) -> tuple[bool, str]:
+    from camdyn.analysis.harmonics import synthesize_harmonics
+
+    fit = synthesize_harmonics(coef, speed, t - t[0])
+    var = float(np.var(x))
+    explained = 1.0 - float(np.var(x - fit)) / var if var > 0 else 0.0
+    ok = explained >= PERIODIC_FRACTION
+    return ok, (f"the cam harmonics explain {100 * explained:.2f} % of the variance of {name} "
+                f"(needs {100 * PERIODIC_FRACTION:.0f} %: a periodic response without impacts)")
+
+
+def estimate_friction(system: System, record: xr.Dataset, speed: float | None = None, harmonics: int = 20,
+                      enforce: bool = True) -> FrictionEstimate:
+    """Estimate the coefficient of friction from a steady-state record.
+
+    Parameters
+    ----------
+    system : System
+        The rig (geometry, mass, spring; ``cam.runout`` as in the record). Its friction
+        settings are not used.
+    record : xarray.Dataset
+        ``Nx``, ``Ny`` [N] and ``alpha_ddot`` [rad/s^2] (or ``a_t`` [m/s^2]) over
+        ``time`` [s] (see :mod:`camdyn.io.measurements`). Their DC parts are ignored.
+    speed : float, optional
+        Cam speed [Hz]; default the record's ``speed_hz`` attribute, else estimated from
+        the acceleration's spectrum.
+    harmonics : int
+        Cam harmonics of each signal kept in the force balance (1: the thesis's method).
+    enforce : bool
+        Raise :class:`IdentificationError` when a check fails (default); otherwise
+        return the estimate with the failed checks marked.
+
+    Raises
+    ------
+    IdentificationError
+        The record loses contact, has a reversing sliding velocity, is not periodic at
+        the cam speed, or is shorter than three revolutions.
+    """
+    if system.motion.kind != "constant":
+        raise ParameterError("the friction estimator needs constant cam motion")
+    if not (isinstance(harmonics, int) and harmonics >= 1):
+        raise ParameterError(f"harmonics must be a positive integer, got {harmonics!r}")
+    record = angular_acceleration(record, system.follower.sensor_distance)
+    check_record(record, ("Nx", "Ny", "alpha_ddot"))
+    t = record["time"].values
+    fs = 1.0 / (t[1] - t[0])
+    if speed is not None:
+        source = "given"
+    elif "speed_hz" in record.attrs:
+        speed, source = float(record.attrs["speed_hz"]), "record metadata"
+    else:
+        speed, source = estimate_speed(t, record["alpha_ddot"].values), "estimated from alpha_ddot"
+    speed = float(speed)
+    if not (math.isfinite(speed) and speed > 0):
+        raise ParameterError(f"the cam speed must be positive, got {speed!r} Hz")
+    duration = t[-1] - t[0] + 1.0 / fs
+    revolutions = int(math.floor(duration * speed + 1e-9))
+    if revolutions < 3:
+        raise IdentificationError(f"the record spans {duration * speed:.2f} cam revolutions at {speed:.4g} Hz; "
+                                  "at least 3 whole revolutions are needed")
+    fit_order = int(min(max(harmonics, 20), math.floor(0.45 * fs / speed)))
+    if fit_order < harmonics:
+        raise IdentificationError(f"sampling at {fs:.4g} Hz resolves only {fit_order} cam harmonics; "
+                                  f"{harmonics} were asked for")
+    keep = t >= t[-1] + 1.0 / fs - revolutions / speed - 0.5 / fs     # last whole revolutions
+    tw = t[keep]
+    coefs = {n: fit_harmonics(tw, record[n].values[keep], speed, fit_order) for n in ("Nx", "Ny", "alpha_ddot")}
+
+    checks = {}
+    ok, detail = _harmonic_check("alpha_ddot", record["alpha_ddot"].values[keep], coefs["alpha_ddot"], tw, speed)
+    checks["periodic"] = {"passed": ok, "detail": detail}
+    kin = check_regime(system, speed)
+    checks["contact_kept_kinematics"] = {
+        "passed": kin.contact_kept,
+        "detail": (f"inverse kinematics: the required normal force stays above {kin.min_contact_force:.3g} N"
+                   if kin.contact_kept else "inverse kinematics: " + kin.reasons()[0])}
+    checks["no_sliding_reversal"] = {
+        "passed": not kin.sliding_reversal,
+        "detail": ("inverse kinematics: vr keeps one sign" if not kin.sliding_reversal else
+                   "inverse kinematics: the sliding velocity vr reverses during a revolution")}
+    sign = kin.sliding_sign or 1
+    if enforce and not all(c["passed"] for c in checks.values()):
+        raise IdentificationError("friction estimate refused: " +
+                                  "; ".join(c["detail"] for c in checks.values() if not c["passed"]))
+
+    p = L.pack(system, initial_angle=0.0)
+    omega = 2.0 * math.pi * speed
+    alpha_dc = float(inverse_kinematics(system, speed=speed, points=GRID)["alpha"].mean())
+
+    def forces(orders):
+        acc, vel, ang = _rebuild(coefs["alpha_ddot"], orders, omega, GRID)
+        nx = _rebuild(coefs["Nx"], orders, omega, GRID)[0]
+        ny = _rebuild(coefs["Ny"], orders, omega, GRID)[0]
+        alpha = alpha_dc + ang
+        fn0, ff0 = contact_forces_from_reaction(alpha, vel, acc, nx, ny, p)
+        return fn0, ff0, np.sin(alpha), np.cos(alpha)
+
+    fn0, ff0, sa, ca = forces(harmonics)
+    (fn0_0, fn0_1), (ff0_0, ff0_1) = _project(fn0), _project(ff0)
+    (s_0, s_1), (c_0, c_1) = _project(sa), _project(ca)
+
+    def equations(x):
+        mu, nx_dc, ny_dc = x
+        fn_0 = fn0_0 + nx_dc * s_0 + ny_dc * c_0           # eq 4.36
+        fn_1 = fn0_1 + nx_dc * s_1 + ny_dc * c_1           # eq 4.37
+        ff_0 = ff0_0 - nx_dc * c_0 + ny_dc * s_0           # eq 4.34
+        ff_1 = ff0_1 - nx_dc * c_1 + ny_dc * s_1           # eq 4.35
+        r1 = ff_1 - sign * mu * fn_1                       # eqs 4.39-4.40
+        return np.array([ff_0 - sign * mu * fn_0, r1.real, r1.imag])   # eq 4.38
+
+    # The equations are bilinear: for a fixed mu they are linear in (Nx_dc, Ny_dc), so
+    # solutions make det M(mu) = 0, a cubic in mu. Every real root is a candidate; the
+    # physical one has mu >= 0 and a positive mean normal force. Levenberg-Marquardt
+    # polishes it.
+    def matrix(mu):
+        r1 = [ff0_1 - sign * mu * fn0_1, -c_1 - sign * mu * s_1, s_1 - sign * mu * c_1]
+        return np.array([[ff0_0 - sign * mu * fn0_0, -c_0 - sign * mu * s_0, s_0 - sign * mu * c_0],
+                         [v.real for v in r1], [v.imag for v in r1]])
+
+    probes = np.array([0.0, 0.5, 1.0, 1.5])
+    cubic = np.polyfit(probes, [np.linalg.det(matrix(m)) for m in probes], 3)
+    candidates = []
+    for root in np.roots(cubic):
+        if abs(root.imag) > 1e-9 * max(1.0, abs(root.real)) or root.real < 0:
+            continue
+        mu0 = float(root.real)
+        m = matrix(mu0)
+        dc = np.linalg.lstsq(m[:, 1:], -m[:, 0], rcond=None)[0]
+        fn_dc = fn0_0 + dc[0] * s_0 + dc[1] * c_0
+        if fn_dc > 0:
+            candidates.append((mu0, float(dc[0]), float(dc[1])))
+    if not candidates:
+        raise IdentificationError("no physical solution (mu >= 0 with a positive mean normal force): the record "
+                                  "does not fit Coulomb friction with one sliding direction")
+    # several admissible roots: the one whose rebuilt normal force stays most positive
+    def lowest_force(c):
+        return float(np.min(fn0 + c[1] * sa + c[2] * ca))
+    guess = np.array(max(candidates, key=lowest_force))
+    sol = least_squares(equations, guess, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=2000)
+    mu, nx_dc, ny_dc = (float(v) for v in sol.x)
+    fn_1 = fn0_1 + nx_dc * s_1 + ny_dc * c_1
+    residual = float(np.linalg.norm(sol.fun) / max(abs(fn_1), 1e-300))
+
+    # whole-waveform checks with every fitted harmonic
+    fn_all, ff_all, sa_all, ca_all = forces(fit_order)
+    fn_t = fn_all + nx_dc * sa_all + ny_dc * ca_all
+    ff_t = ff_all - nx_dc * ca_all + ny_dc * sa_all
+    misfit = float(np.sqrt(np.mean((ff_t - sign * mu * fn_t) ** 2)) / np.sqrt(np.mean(fn_t ** 2)))
+    checks["contact_kept_record"] = {
+        "passed": bool(fn_t.min() > 0), "enforced": False,
+        "detail": (f"the normal force rebuilt from the record ranges over {fn_t.min():.3g} to {fn_t.max():.3g} N "
+                   "(advisory: its mean rests on the estimated DC reactions, which are far less certain "
+                   "than mu)")}
+    checks["solved"] = {"passed": bool(sol.success and residual < 1e-6 and mu >= 0),
+                        "detail": f"Levenberg-Marquardt: {sol.message} (relative residual {residual:.2g}, mu {mu:.4g})"}
+
+    amplitudes = {"alpha_ddot_1": coefs["alpha_ddot"][1], "Nx_1": coefs["Nx"][1], "Ny_1": coefs["Ny"][1],
+                  "Fn_dc": fn0_0 + nx_dc * s_0 + ny_dc * c_0, "Fn_1": fn_1,
+                  "Ff_dc": ff0_0 - nx_dc * c_0 + ny_dc * s_0, "Ff_1": ff0_1 - nx_dc * c_1 + ny_dc * s_1}
+    amplitudes = {k: [float(np.real(v)), float(np.imag(v))] for k, v in amplitudes.items()}
+    est = FrictionEstimate(mu=mu, Nx_dc=nx_dc, Ny_dc=ny_dc, speed_hz=speed, speed_source=source,
+                           residual=residual, coulomb_misfit=misfit, revolutions=revolutions, harmonics=harmonics,
+                           sliding_sign=int(sign), amplitudes=amplitudes, checks=checks)
+    if enforce and not est.accepted:
+        reasons = [c["detail"] for c in checks.values() if not c["passed"] and c.get("enforced", True)]
+        raise IdentificationError("friction estimate refused: " + "; ".join(reasons))
+    return est

@@ -1,0 +1,78 @@
+"""Synthetic measurement records: simulate, keep the steady state, add sensor noise."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import xarray as xr
+
+from camdyn.errors import ParameterError
+from camdyn.io.measurements import make_record
+from camdyn.parameters import System
+from camdyn.simulation import simulate
+
+__all__ = ["synthesize"]
+
+
+def synthesize(system: System, speed: float | None = None, revolutions: float = 40.0, sample_rate: float = 20e3,
+               noise: float = 0.0, settle: float = 20.0, seed: int | None = 0,
+               channels=("Nx", "Ny", "alpha_ddot"), transducer_angle: float = 0.0) -> xr.Dataset:
+    """A measurement-like record of the simulated system.
+
+    Parameters
+    ----------
+    system : System
+    speed : float, optional
+        Cam speed [Hz]; default ``system.motion.speed``.
+    revolutions : float
+        Length of the kept record [cam periods].
+    sample_rate : float
+        Sampling rate [Hz].
+    noise : float
+        Gaussian noise added to each channel, as a fraction of that channel's rms about
+        its mean [-] (0.01 is "1 % noise").
+    settle : float
+        Cam periods simulated and dropped first, so the record is in steady state [-].
+    seed : int, optional
+        Seed of the noise generator (None: fresh entropy).
+    channels : sequence of str
+        Channels to keep, from ``Nx``, ``Ny``, ``alpha_ddot``, ``a_t`` (``a_t = l_a alpha_ddot``).
+    transducer_angle : float
+        Misalignment ``kappa`` [rad] of the vertical force transducer: it records
+        ``Ny cos(kappa)`` (thesis 4.8).
+
+    Returns
+    -------
+    xarray.Dataset
+        A record (see :mod:`camdyn.io.measurements`) starting at ``time = 0``, with the
+        true forces of the simulation (DC included), attributes ``speed_hz``, ``runout``,
+        ``preset`` and ``noise``.
+    """
+    if not (math.isfinite(noise) and noise >= 0):
+        raise ParameterError(f"noise must be a non-negative fraction, got {noise!r}")
+    if not (math.isfinite(settle) and settle >= 0):
+        raise ParameterError(f"settle must be a non-negative number of revolutions, got {settle!r}")
+    if speed is not None:
+        system = system.with_values(**{"motion.speed": float(speed)})
+    ds = simulate(system, revolutions=settle + revolutions, sample_rate=sample_rate)
+    period = system.motion.period
+    keep = ds["time"].values >= settle * period - 0.5 / sample_rate
+    ds = ds.isel(time=keep)
+    t = ds["time"].values - ds["time"].values[0]
+    rng = np.random.default_rng(seed)
+    out = {}
+    for name in channels:
+        if name == "a_t":
+            x = ds["alpha_ddot"].values * system.follower.sensor_distance
+        elif name in ("Nx", "Ny", "alpha_ddot"):
+            x = ds[name].values.copy()
+        else:
+            raise ParameterError(f"unknown channel {name!r}; choose from Nx, Ny, alpha_ddot, a_t")
+        if name == "Ny" and transducer_angle:
+            x = x * math.cos(transducer_angle)
+        if noise > 0:
+            x = x + noise * np.std(x) * rng.standard_normal(x.size)
+        out[name] = x
+    return make_record(t, out, speed_hz=system.motion.speed, runout=system.cam.runout, preset=system.name,
+                       noise=noise)
