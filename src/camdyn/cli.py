@@ -195,6 +195,11 @@ def demo(out: Path = typer.Option(Path("out"), help="Folder for the figures and 
     run_demo(out, console)
 
 
+from camdyn.cli_tools import register  # noqa: E402  (identify, synthesize, tribology, design)
+
+register(app)
+
+
 def main(argv=None) -> int:
     """Entry point: run the app, turning input errors into one line and exit status 2."""
     try:
@@ -205,11 +210,9 @@ def main(argv=None) -> int:
     except click_exceptions.UsageError as exc:
         print(f"error: {exc.format_message()}", file=sys.stderr)
         return 2
-    except click_exceptions.Abort:
+    except KeyboardInterrupt:
         print("aborted", file=sys.stderr)
         return 1
-    except click_exceptions.Exit as exc:
-        return exc.exit_code
     except OSError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

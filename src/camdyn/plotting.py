@@ -76,3 +76,76 @@ def plot_spectrum(ds: xr.Dataset, path: str | Path, variable: str = "alpha_ddot"
     upper = max(40 * speed, 1.5 * fn if fn == fn else 0.0) if speed else freq[-1]
     ax.set_xlim(0, min(freq[-1], upper))
     return _save(fig, path)
+
+
+def plot_design_map(ds: xr.Dataset, path: str | Path) -> Path:
+    """Regime map of a design study (figs 4.4, 4.10): loss of contact, sliding reversal,
+    harmonics too close to resonance, wrong lubrication regime, and the admissible
+    window, with the recommended point starred."""
+    from matplotlib.colors import ListedColormap
+
+    code = np.full(ds["admissible"].shape, 4, dtype=float)           # admissible
+    code[~ds["regime_ok"].values] = 3
+    code[~ds["harmonics_clear"].values] = 2
+    code[ds["sliding_reversal"].values] = 1
+    code[~ds["contact_kept"].values] = 0
+    names = ["loss of contact", "vr reversal", "harmonics near resonance", "other lubrication regime",
+             "admissible"]
+    colours = ["#d62728", "#ff7f0e", "#7f7f7f", "#bcbd22", "#2ca02c"]
+    fig, ax = plt.subplots(figsize=(7, 5))
+    ratio = ds["ratio"].values
+    speed = ds["speed"].values
+    ax.pcolormesh(ratio, speed, code.T, cmap=ListedColormap(colours), vmin=-0.5, vmax=4.5, shading="nearest")
+    for c, n in zip(colours, names):
+        ax.plot([], [], "s", color=c, label=n, markersize=9)
+    if np.isfinite(ds.attrs.get("recommended_ratio", np.nan)):
+        ax.plot(ds.attrs["recommended_ratio"], ds.attrs["recommended_speed"], "*", color="white",
+                markeredgecolor="black", markersize=16, label="recommended")
+    ax.set_xlabel(_label(ds["ratio"]))
+    ax.set_ylabel(_label(ds["speed"]))
+    ax.set_title(f"design map, {ds.attrs.get('system', '')}")
+    ax.legend(fontsize=7, loc="upper right", framealpha=0.9)
+    return _save(fig, path)
+
+
+def plot_contact_conditions(ds: xr.Dataset, path: str | Path) -> Path:
+    """Hertz pressure, velocities and slide-to-roll ratio (fig 4.5), and the lambda ratio,
+    over one revolution."""
+    theta = np.degrees(ds["cam_angle"].values)
+    rows = 4 if "lambda_ratio" in ds else 3
+    fig, axes = plt.subplots(rows, 1, figsize=(7, 2.2 * rows + 1), sharex=True)
+    axes[0].plot(theta, ds["peak_pressure"].values / 1e9, color="C0")
+    axes[0].set_ylabel("peak pressure [GPa]")
+    axes[1].plot(theta, ds["sliding_velocity"].values, label="sliding vr")
+    axes[1].plot(theta, ds["sum_velocity"].values, label="sum ve")
+    axes[1].set_ylabel("velocity [m/s]")
+    axes[1].legend(fontsize=8)
+    axes[2].plot(theta, ds["slide_to_roll"].values, color="C2")
+    axes[2].set_ylabel("slide-to-roll vr/ve [-]")
+    if "lambda_ratio" in ds:
+        axes[3].plot(theta, ds["lambda_ratio"].values, color="C3")
+        for level in (1.0, 3.0):
+            axes[3].axhline(level, color="k", lw=0.6, ls="--")
+        axes[3].set_ylabel("lambda ratio [-]")
+        axes[3].set_title(f"{ds.attrs.get('lubricant', '')}: boundary < 1 < mixed < 3 < EHL", fontsize=8)
+    axes[-1].set_xlabel("cam angle [deg]")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+    return _save(fig, path)
+
+
+def plot_accelerance(frequency, response, estimate, path: str | Path) -> Path:
+    """Accelerance magnitude near a peak with its half-power band (fig 4.7)."""
+    fig, ax = plt.subplots(figsize=(7, 4))
+    fn = estimate.natural_frequency
+    width = max(8 * (estimate.upper - estimate.lower), 20 * estimate.resolution)
+    sel = (frequency > fn - width) & (frequency < fn + width)
+    ax.plot(frequency[sel], np.abs(response[sel]), ".-", color="C0", label="|A(f)|")
+    ax.axhline(estimate.peak / np.sqrt(2), color="k", ls="--", lw=0.7, label="half power")
+    ax.axvspan(estimate.lower, estimate.upper, color="C1", alpha=0.2,
+               label=f"zeta = {100 * estimate.damping_ratio:.2f} %")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("accelerance [1/kg]")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    return _save(fig, path)

@@ -9,6 +9,8 @@ channel         unit      meaning
 ``Ny``          N         pivot reaction on the follower, vertical
 ``alpha_ddot``  rad/s^2   follower angular acceleration
 ``a_t``         m/s^2     tangential accelerometer signal at the sensor distance ``l_a``
+``force``       N         impulse-hammer force (impulse tests)
+``acceleration`` m/s^2    response acceleration (impulse tests)
 ============== ========= ==============================================================
 
 and optional metadata attributes (``speed_hz`` [Hz], ``runout`` [m], ``preset``). A record
@@ -52,6 +54,8 @@ CHANNEL_UNITS = {
     "Ny": ("N", "pivot reaction on the follower, vertical"),
     "alpha_ddot": ("rad/s^2", "follower angular acceleration"),
     "a_t": ("m/s^2", "tangential acceleration at the accelerometer"),
+    "force": ("N", "impulse-hammer force (impulse tests)"),
+    "acceleration": ("m/s^2", "response acceleration (impulse tests)"),
 }
 _PINT_UNITS = {"N": "N", "rad/s^2": "rad/s**2", "m/s^2": "m/s**2"}
 _METADATA = {"speed": "speed_hz", "speed_hz": "speed_hz", "cam.runout": "runout", "runout": "runout",
@@ -100,7 +104,8 @@ def check_record(ds: xr.Dataset, channels=("Nx", "Ny", "alpha_ddot"), clip_run: 
     """Refuse a record missing ``channels``, or holding NaN, infinite or clipped samples.
 
     A channel counts as clipped when ``clip_run`` or more consecutive samples sit exactly
-    at its largest or smallest value, as a saturated amplifier or ADC leaves them.
+    at its largest or smallest value, as a saturated amplifier or ADC leaves them (a
+    limit of exactly zero is exempt: a noise-free hammer force rests there).
     """
     for name in channels:
         if name not in ds:
@@ -116,7 +121,7 @@ def check_record(ds: xr.Dataset, channels=("Nx", "Ny", "alpha_ddot"), clip_run: 
             at = np.concatenate(([0], (x == limit).astype(np.int8), [0]))
             edges = np.diff(at)
             runs = np.nonzero(edges == -1)[0] - np.nonzero(edges == 1)[0]
-            if runs.size and runs.max() >= clip_run and np.ptp(x) > 0:
+            if runs.size and runs.max() >= clip_run and np.ptp(x) > 0 and limit != 0.0:
                 raise DataError(f"channel {name} looks clipped at its {word} limit {limit:.6g} "
                                 f"{ds[name].attrs.get('units', '')} ({int(runs.max())} consecutive samples)")
 
@@ -313,9 +318,16 @@ def write_measurement(ds: xr.Dataset, path: str | Path) -> Path:
         uff = pyuff.UFF(str(path))
         for n in names:
             uff.write_sets(pyuff.prepare_58(
-                id1=n, id2="camdyn record", id4=meta, func_type=1, rsp_node=1, rsp_dir=1, ref_node=0, ref_dir=0,
-                abscissa_spacing=1, abscissa_min=float(t[0]), abscissa_inc=float(t[1] - t[0]),
-                ordinate_axis_units_lab=CHANNEL_UNITS[n][0], abscissa_axis_units_lab="s",
+                binary=0, id1=n, id2="camdyn record", id3="", id4=meta, id5="", func_type=1, ver_num=0,
+                load_case_id=0, rsp_ent_name="follower", rsp_node=1, rsp_dir=1, ref_ent_name="NONE", ref_node=0,
+                ref_dir=0, abscissa_spacing=1, abscissa_min=float(t[0]), abscissa_inc=float(t[1] - t[0]),
+                z_axis_value=0.0, abscissa_spec_data_type=17, abscissa_len_unit_exp=0,
+                abscissa_force_unit_exp=0, abscissa_temp_unit_exp=0, abscissa_axis_units_lab="s",
+                ordinate_spec_data_type=0, ordinate_len_unit_exp=0, ordinate_force_unit_exp=0,
+                ordinate_temp_unit_exp=0, ordinate_axis_units_lab=CHANNEL_UNITS[n][0],
+                orddenom_spec_data_type=0, orddenom_len_unit_exp=0, orddenom_force_unit_exp=0,
+                orddenom_temp_unit_exp=0, orddenom_axis_units_lab="", z_axis_spec_data_type=0,
+                z_axis_len_unit_exp=0, z_axis_force_unit_exp=0, z_axis_temp_unit_exp=0, z_axis_axis_units_lab="",
                 data=ds[n].values.astype(float), x=t), mode="add")
     else:
         raise DataError(f"{path}: unknown measurement format {suffix!r} (use .csv, .nc/.h5 or .uff/.unv)")

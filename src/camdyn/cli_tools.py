@@ -1,0 +1,260 @@
+"""Commands for identification, tribology and experiment design, registered on the
+main ``camdyn`` app by :mod:`camdyn.cli`."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import List, Optional
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.table import Table
+
+from camdyn.config import load_system, parse_assignments
+from camdyn.errors import ParameterError
+from camdyn.units import parse_quantity, parse_speed
+
+console = Console()
+identify_app = typer.Typer(help="Estimate model parameters from measured records.", no_args_is_help=True)
+SetOption = typer.Option(None, "--set", "-s", help="Override a parameter: KEY=VALUE, e.g. cam.runout=3.5mm.")
+
+
+def _system(source: str, assignments):
+    return load_system(source, parse_assignments(assignments))
+
+
+def _grid(text: str, what: str, unit: str | None = None) -> np.ndarray:
+    """``START:STOP:COUNT`` (inclusive, COUNT points) or a comma list."""
+    def value(s):
+        return parse_speed(s, what) if unit == "Hz" else float(parse_quantity(s, "", what))
+    try:
+        if ":" in text:
+            start, stop, count = text.split(":")
+            n = int(count)
+            if n < 1:
+                raise ValueError
+            return np.linspace(value(start), value(stop), n)
+        return np.array([value(s) for s in text.split(",")])
+    except ValueError:
+        raise ParameterError(f"{what}: expected START:STOP:COUNT or a comma list, got {text!r}") from None
+
+
+def _hertz(text: str) -> float:
+    """A frequency [Hz]; a bare number is taken as Hz."""
+    try:
+        return float(text)
+    except ValueError:
+        return parse_quantity(text, "Hz", "frequency")
+
+
+def _print_json(obj) -> None:
+    typer.echo(json.dumps(obj, indent=2, default=lambda o: o.item() if hasattr(o, "item") else str(o)))
+
+
+def synthesize(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
+               set_: Optional[List[str]] = SetOption,
+               speed: Optional[str] = typer.Option(None, help="Cam speed, e.g. 16Hz or 960rpm."),
+               revolutions: float = typer.Option(40.0, help="Revolutions kept in the record."),
+               sample_rate: str = typer.Option("20kHz", "--sample-rate", help="Sampling rate."),
+               noise: float = typer.Option(0.0, help="Gaussian noise per channel, fraction of its rms (0.01 = 1 %)."),
+               settle: float = typer.Option(20.0, help="Revolutions simulated and dropped first (transient)."),
+               seed: int = typer.Option(0, help="Noise seed."),
+               channels: str = typer.Option("Nx,Ny,alpha_ddot", help="Channels: Nx, Ny, alpha_ddot, a_t."),
+               out: Path = typer.Option(..., help="Output file: .csv, .nc or .uff.")):
+    """Simulate a measurement record (steady state, optional noise) and write it."""
+    from camdyn.io.measurements import write_measurement
+    from camdyn.synthesis import synthesize as make
+
+    system = _system(source, set_)
+    rate = _hertz(sample_rate)
+    rec = make(system, parse_speed(speed) if speed else None, revolutions=revolutions, sample_rate=rate,
+               noise=noise, settle=settle, seed=seed, channels=tuple(c.strip() for c in channels.split(",")))
+    path = write_measurement(rec, out)
+    console.print(f"wrote {path} ({rec.sizes['time']} samples at {rate:g} Hz, "
+                  f"{revolutions:g} revolutions at {rec.attrs['speed_hz']:g} Hz, noise {noise:g})")
+
+
+def synthesize_impulse(damping: float = typer.Option(0.02, help="Damping ratio of the lower mode [-]."),
+                       duration: float = typer.Option(1.0, help="Record length [s]."),
+                       sample_rate: str = typer.Option("20kHz", "--sample-rate"),
+                       noise: float = typer.Option(0.0, help="Noise fraction of each channel's rms."),
+                       out: Path = typer.Option(..., help="Output file: .csv, .nc or .uff.")):
+    """Write a synthetic two-mass impulse test (force, acceleration) with a known damping ratio."""
+    from camdyn.identification.modal import synthesize_impulse_test
+    from camdyn.io.measurements import write_measurement
+
+    rec = synthesize_impulse_test(damping_ratios=(damping, 0.02), duration=duration,
+                                  sample_rate=_hertz(sample_rate), noise=noise)
+    write_measurement(rec, out)
+    fn = ", ".join(f"{f:.1f}" for f in rec.attrs["natural_frequencies"])
+    console.print(f"wrote {out}: modes at {fn} Hz, lower-mode damping {100 * damping:g} %")
+
+
+@identify_app.command("friction")
+def identify_friction(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
+                      data: Path = typer.Argument(..., help="Record: .csv, .nc/.h5 or .uff (Nx, Ny, alpha_ddot or a_t)."),
+                      set_: Optional[List[str]] = SetOption,
+                      speed: Optional[str] = typer.Option(None, help="Cam speed; default from the file or estimated."),
+                      harmonics: int = typer.Option(20, help="Cam harmonics per signal in the force balance "
+                                                             "(1 = the thesis's truncation)."),
+                      json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
+    """Coefficient of friction from pivot forces and acceleration (thesis 4.6)."""
+    from camdyn.identification.friction import estimate_friction
+    from camdyn.io.measurements import read_measurement
+
+    system = _system(source, set_)
+    rec = read_measurement(data)
+    est = estimate_friction(system, rec, speed=parse_speed(speed) if speed else None, harmonics=harmonics)
+    if json_out:
+        _print_json(est.to_dict())
+        return
+    table = Table("quantity", "value")
+    table.add_row("coefficient of friction mu", f"{est.mu:.5g}")
+    table.add_row("mean pivot reaction Nx_dc", f"{est.Nx_dc:.4g} N")
+    table.add_row("mean pivot reaction Ny_dc", f"{est.Ny_dc:.4g} N")
+    table.add_row("cam speed", f"{est.speed_hz:.6g} Hz ({est.speed_source})")
+    table.add_row("revolutions analysed", str(est.revolutions))
+    table.add_row("Coulomb misfit over the waveform", f"{100 * est.coulomb_misfit:.3g} %")
+    console.print(table)
+    for name, c in est.checks.items():
+        mark = "ok" if c["passed"] else ("FAILED" if c.get("enforced", True) else "note")
+        console.print(f"  [{mark}] {name}: {c['detail']}")
+
+
+@identify_app.command("modal-damping")
+def identify_modal(data: Path = typer.Argument(..., help="Impulse test: force [N] and acceleration [m/s^2]."),
+                   band: Optional[str] = typer.Option(None, help="Search band, e.g. 700:1200 (Hz)."),
+                   plot: Optional[Path] = typer.Option(None, help="Write the accelerance plot (PNG)."),
+                   json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
+    """Modal damping ratio by the half-power bandwidth of the accelerance peak (thesis 4.5.2)."""
+    from camdyn.identification.modal import accelerance, half_power_damping
+    from camdyn.io.measurements import read_measurement
+
+    rec = read_measurement(data)
+    freq, h = accelerance(rec)
+    limits = None
+    if band:
+        parts = band.split(":")
+        if len(parts) != 2:
+            raise ParameterError(f"--band: expected LOW:HIGH in Hz, got {band!r}")
+        limits = (_hertz(parts[0]), _hertz(parts[1]))
+    est = half_power_damping(freq, h, limits)
+    if plot:
+        from camdyn.plotting import plot_accelerance
+        plot_accelerance(freq, h, est, plot)
+    if json_out:
+        _print_json(est.to_dict())
+        return
+    console.print(f"natural frequency {est.natural_frequency:.2f} Hz, damping ratio "
+                  f"{100 * est.damping_ratio:.3f} % (half-power band {est.lower:.2f}-{est.upper:.2f} Hz, "
+                  f"{est.lines} lines)")
+
+
+def tribology(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
+              set_: Optional[List[str]] = SetOption,
+              speed: Optional[str] = typer.Option(None, help="Cam speed, e.g. 11.55Hz."),
+              lubricant: str = typer.Option("agma-4ep", help="Lubricant: agma-4ep, iso-32, or none."),
+              finish: str = typer.Option("ground", help="Surface finish: ground or sand-blasted."),
+              plot: Optional[Path] = typer.Option(None, help="Write the contact-conditions plot (PNG)."),
+              json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
+    """Hertz pressure, velocities, slide-to-roll ratio, film thickness and lubrication regime."""
+    from camdyn.tribology import contact_conditions, lubrication_regime
+
+    system = _system(source, set_)
+    ds = contact_conditions(system, parse_speed(speed) if speed else None,
+                            None if lubricant == "none" else lubricant, finish)
+    if not ds.attrs["contact_kept"]:
+        raise ParameterError("the follower loses contact at this speed, so the contact conditions are undefined; "
+                             "lower the speed or the runout")
+    rows = [("peak_pressure", "Pa", 1e-9, "GPa"), ("contact_radius", "m", 1e6, "um"), ("Fn", "N", 1, "N"),
+            ("sliding_velocity", "m/s", 1, "m/s"), ("sum_velocity", "m/s", 1, "m/s"), ("slide_to_roll", "1", 1, "-")]
+    if "film_thickness" in ds:
+        rows += [("film_thickness", "m", 1e6, "um"), ("lambda_ratio", "1", 1, "-")]
+    out = {name: {"min": float(np.nanmin(ds[name].values)), "max": float(np.nanmax(ds[name].values)),
+                  "mean": float(np.nanmean(ds[name].values)), "units": unit} for name, unit, _, _ in rows}
+    if "lambda_ratio" in ds:
+        out["regime"] = str(lubrication_regime(out["lambda_ratio"]["min"]))
+        out["lubricant"] = ds.attrs["lubricant"]
+    out["speed_hz"] = float(ds.attrs["speed_hz"])
+    if plot:
+        from camdyn.plotting import plot_contact_conditions
+        plot_contact_conditions(ds, plot)
+    if json_out:
+        _print_json(out)
+        return
+    table = Table("quantity", "min", "mean", "max", "unit")
+    for name, _, scale, shown in rows:
+        v = out[name]
+        table.add_row(name, *(f"{v[k] * scale:.4g}" for k in ("min", "mean", "max")), shown)
+    console.print(table)
+    if "regime" in out:
+        console.print(f"lubrication regime at the thinnest film: {out['regime']} ({out['lubricant']}, {finish})")
+
+
+def design(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
+           set_: Optional[List[str]] = SetOption,
+           axis: str = typer.Option("runout", help="runout (e/a) or axis_ratio (b/a, elliptic cam)."),
+           ratios: str = typer.Option("0.05:0.5:10", help="Ratios, START:STOP:COUNT or a list."),
+           speeds: str = typer.Option("5Hz:30Hz:26", help="Cam speeds, START:STOP:COUNT or a list."),
+           lubricant: Optional[str] = typer.Option(None, help="agma-4ep or iso-32: adds the lambda ratio."),
+           finish: str = typer.Option("ground", help="Surface finish for the lambda ratio."),
+           regime: Optional[str] = typer.Option(None, help="Required regime: boundary, mixed or EHL."),
+           harmonic_margin: float = typer.Option(0.2, help="Largest 5 f_cam / f_n."),
+           out: Optional[Path] = typer.Option(None, help="Write the map as netCDF."),
+           plot: Path = typer.Option(Path("design.png"), help="Write the map figure (PNG)."),
+           json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
+    """Map the design criteria of the friction experiment and recommend an operating window (thesis 4.4)."""
+    from camdyn.analysis.design import design_map
+    from camdyn.plotting import plot_design_map
+
+    system = _system(source, set_)
+    grid_r = _grid(ratios, "ratios")
+    grid_s = _grid(speeds, "speeds", "Hz")
+    with Progress(TextColumn("design map"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
+                  TimeRemainingColumn(), console=Console(stderr=True), transient=True,
+                  disable=json_out) as bar:
+        task = bar.add_task("map", total=grid_r.size * grid_s.size)
+        ds = design_map(system, axis, grid_r, grid_s, lubricant=lubricant, roughness=finish, regime=regime,
+                        harmonic_margin=harmonic_margin, progress=lambda d, t: bar.update(task, completed=d))
+    if out:
+        from camdyn.io import save_netcdf
+        stored = ds.copy()
+        for name in [k for k in ds.data_vars if ds[k].dtype == bool]:
+            stored[name] = ds[name].astype("int8")
+        save_netcdf(stored, out)
+    plot_design_map(ds, plot)
+    adm = ds["admissible"].values
+    window = {}
+    for i, r in enumerate(ds["ratio"].values):
+        ok = ds["speed"].values[adm[i]]
+        if ok.size:
+            window[f"{r:.4g}"] = [float(ok.min()), float(ok.max())]
+    result = {"axis": axis, "recommended_ratio": ds.attrs["recommended_ratio"],
+              "recommended_speed_hz": ds.attrs["recommended_speed"], "admissible_speeds_hz": window,
+              "admissible_points": int(adm.sum()), "points": int(adm.size), "figure": str(plot)}
+    if json_out:
+        _print_json(result)
+        return
+    table = Table(ds["ratio"].attrs["long_name"], "admissible speeds [Hz]")
+    for r, (lo, hi) in window.items():
+        table.add_row(r, f"{lo:.3g} - {hi:.3g}")
+    console.print(table)
+    if math.isfinite(result["recommended_ratio"]):
+        console.print(f"recommended: {ds['ratio'].attrs['long_name']} = {result['recommended_ratio']:.4g} at "
+                      f"{result['recommended_speed_hz']:.4g} Hz (strongest first harmonic with a contact margin)")
+    else:
+        console.print("no grid point meets every criterion")
+    console.print(f"figure: {plot}")
+
+
+def register(app: typer.Typer) -> None:
+    """Add these commands to the main app."""
+    app.add_typer(identify_app, name="identify")
+    app.command("synthesize")(synthesize)
+    app.command("synthesize-impulse")(synthesize_impulse)
+    app.command("tribology")(tribology)
+    app.command("design")(design)
