@@ -249,13 +249,15 @@ def estimate_friction(system: System, record: xr.Dataset, speed: float | None = 
         fn_dc = fn0_0 + dc[0] * s_0 + dc[1] * c_0
         if fn_dc > 0:
             candidates.append((mu0, float(dc[0]), float(dc[1])))
-    if not candidates:
-        raise IdentificationError("no physical solution (mu >= 0 with a positive mean normal force): the record "
-                                  "does not fit Coulomb friction with one sliding direction")
+    no_root = ("no physical solution (mu >= 0 with a positive mean normal force): the record does not fit "
+               "Coulomb friction with one sliding direction")
+    if not candidates and enforce:
+        raise IdentificationError(no_root)
+
     # several admissible roots: the one whose rebuilt normal force stays most positive
     def lowest_force(c):
         return float(np.min(fn0 + c[1] * sa + c[2] * ca))
-    guess = np.array(max(candidates, key=lowest_force))
+    guess = np.array(max(candidates, key=lowest_force)) if candidates else np.array([0.3, 0.0, 0.0])
     sol = least_squares(equations, guess, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=2000)
     mu, nx_dc, ny_dc = (float(v) for v in sol.x)
     fn_1 = fn0_1 + nx_dc * s_1 + ny_dc * c_1
@@ -271,8 +273,9 @@ def estimate_friction(system: System, record: xr.Dataset, speed: float | None = 
         "detail": (f"the normal force rebuilt from the record ranges over {fn_t.min():.3g} to {fn_t.max():.3g} N "
                    "(advisory: its mean rests on the estimated DC reactions, which are far less certain "
                    "than mu)")}
-    checks["solved"] = {"passed": bool(sol.success and residual < 1e-6 and mu >= 0),
-                        "detail": f"Levenberg-Marquardt: {sol.message} (relative residual {residual:.2g}, mu {mu:.4g})"}
+    checks["solved"] = {"passed": bool(candidates and sol.success and residual < 1e-6 and mu >= 0),
+                        "detail": (f"Levenberg-Marquardt: {sol.message} (relative residual {residual:.2g}, "
+                                   f"mu {mu:.4g})" if candidates else no_root)}
 
     amplitudes = {"alpha_ddot_1": coefs["alpha_ddot"][1], "Nx_1": coefs["Nx"][1], "Ny_1": coefs["Ny"][1],
                   "Fn_dc": fn0_0 + nx_dc * s_0 + ny_dc * c_0, "Fn_1": fn_1,
