@@ -113,3 +113,15 @@ def test_thesis_truncation_is_worse(friction_rig):
     many = estimate_friction(system, rec)
     assert 0.01 < abs(one.mu - 0.3) / 0.3 < 0.1
     assert abs(many.mu - 0.3) / 0.3 < 1e-3
+
+
+def test_record_time_origin_does_not_matter(friction_rig):
+    """A record starting at t = 0.37 s (a logger's clock) gives the same estimate."""
+    system = _rig(friction_rig, **{"cam.runout": 0.2 * A})
+    rec = synthesize(system, 11.55, revolutions=12.4, sample_rate=10e3, noise=0.01)
+    shifted = rec.assign_coords(time=rec["time"] + 0.37)
+    shifted.attrs.pop("speed_hz")
+    a = estimate_friction(system, rec)
+    b = estimate_friction(system, shifted)
+    assert b.speed_hz == pytest.approx(11.55, rel=1e-4)
+    assert b.mu == pytest.approx(a.mu, rel=2e-3)

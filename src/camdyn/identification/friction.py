@@ -121,7 +121,7 @@ def _rebuild(coef: np.ndarray, orders: int, omega: float, grid: int):
 def _harmonic_check(name: str, x: np.ndarray, coef: np.ndarray, t: np.ndarray, speed: float) -> tuple[bool, str]:
     from camdyn.analysis.harmonics import synthesize_harmonics
 
-    fit = synthesize_harmonics(coef, speed, t - t[0])
+    fit = synthesize_harmonics(coef, speed, t)
     var = float(np.var(x))
     explained = 1.0 - float(np.var(x - fit)) / var if var > 0 else 0.0
     ok = explained >= PERIODIC_FRACTION
