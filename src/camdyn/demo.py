@@ -77,6 +77,33 @@ def run_demo(out: Path, console: Console | None = None) -> dict:
     plot_time_history(ds, out / "impact_rig_time.png", revolutions=2)
     results["impact_rig"] = {"impacts": n_imp, "revolutions": 40, "last_impact": last,
                              "elapsed_s": ds.attrs["elapsed_s"]}
+    results["friction_identification"] = _friction_demo(out, console)
     (out / "demo.json").write_text(json.dumps(results, indent=2))
     console.print(f"figures and results written to {out}/")
     return results
+
+
+def _friction_demo(out: Path, console: Console) -> dict:
+    """The thesis's validation case (4.6): a simulated record with 1 % noise, mu back."""
+    from camdyn.identification.friction import estimate_friction
+    from camdyn.io.measurements import write_measurement
+    from camdyn.plotting import plot_contact_conditions
+    from camdyn.synthesis import synthesize
+    from camdyn.tribology import contact_conditions
+
+    system = load_system("sundar2014-friction", {"cam.runout": "5.25 mm"})
+    exact = estimate_friction(system, synthesize(system, 11.55, revolutions=10, sample_rate=9460.0))
+    record = synthesize(system, 11.55, revolutions=30, sample_rate=9460.0, noise=0.01)
+    write_measurement(record, out / "friction_record.csv")
+    est = estimate_friction(system, record)
+    cc = contact_conditions(system, 11.55, "agma-4ep", "ground")
+    plot_contact_conditions(cc, out / "contact_conditions.png")
+    console.print(f"[bold]Friction identification[/bold] (e/a = 0.3, 11.55 Hz, 9460 Hz, true mu = 0.3): "
+                  f"thesis validation case (10 revolutions) mu = {exact.mu:.5f} "
+                  f"(error {100 * abs(exact.mu - 0.3) / 0.3:.3f} %; thesis 0.302, 0.7 %); with 1 % noise, "
+                  f"30 revolutions: mu = {est.mu:.4f} (error {100 * abs(est.mu - 0.3) / 0.3:.2f} %), "
+                  f"Nx_dc = {est.Nx_dc:.3f} N, Ny_dc = {est.Ny_dc:.3f} N; Hertz peak pressure "
+                  f"{cc['peak_pressure'].max().item() / 1e9:.2f} GPa, lambda (AGMA 4EP, ground) "
+                  f"{float(cc['lambda_ratio'].min()):.3f}-{float(cc['lambda_ratio'].max()):.3f}")
+    return {"mu_validation_case": exact.mu, "mu": est.mu, "mu_true": 0.3, "Nx_dc_N": est.Nx_dc, "Ny_dc_N": est.Ny_dc,
+            "checks_passed": est.accepted}
