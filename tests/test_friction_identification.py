@@ -89,7 +89,7 @@ def test_sliding_reversal_is_refused(friction_rig, monkeypatch):
     driven by a kinematic check that reports a reversal."""
     system = _rig(friction_rig, **{"cam.runout": 0.1 * A})
     rec = synthesize(system, 11.55, revolutions=10, sample_rate=10e3)
-    monkeypatch.setattr(friction_module, "check_regime", lambda s, f: KinematicCheck(True, True, 1.0, math.inf, 0))
+    monkeypatch.setattr(friction_module, "check_regime", lambda s, f, **kw: KinematicCheck(True, True, 1.0, math.inf, 0))
     with pytest.raises(IdentificationError, match="sliding velocity vr reverses"):
         estimate_friction(system, rec)
 

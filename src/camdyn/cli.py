@@ -13,10 +13,10 @@ from pathlib import Path
 from typing import List, Optional
 
 import typer
-from rich.console import Console
 from rich.table import Table
 
-from camdyn.config import SCHEMA, list_presets, load_system, parse_assignments, preset_text, system_to_toml
+from camdyn.config import SCHEMA, list_presets, load_system, preset_text, system_to_toml
+from camdyn.cli_tools import SetOption, _system, console, register
 from camdyn.errors import CamdynError
 from camdyn.units import parse_quantity, parse_speed
 
@@ -29,14 +29,6 @@ app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Nonlinear dynamics of cam-follower systems with rolling-sliding contact.")
 presets_app = typer.Typer(help="List and show bundled parameter presets.", invoke_without_command=True)
 app.add_typer(presets_app, name="presets")
-console = Console()
-
-SetOption = typer.Option(None, "--set", "-s", help="Override a parameter: KEY=VALUE, e.g. cam.runout=3.5mm.")
-
-
-def _system(source: str, assignments):
-    return load_system(source, parse_assignments(assignments))
-
 
 @presets_app.callback()
 def presets_list(ctx: typer.Context):
@@ -195,9 +187,7 @@ def demo(out: Path = typer.Option(Path("out"), help="Folder for the figures and 
     run_demo(out, console)
 
 
-from camdyn.cli_tools import register  # noqa: E402  (identify, synthesize, tribology, design)
-
-register(app)
+register(app)  # identify, synthesize, tribology, design
 
 
 def main(argv=None) -> int:

@@ -27,6 +27,7 @@ from camdyn.analysis.kinematics import inverse_kinematics
 from camdyn.errors import CamdynError, ParameterError
 from camdyn.model.equilibrium import static_equilibrium
 from camdyn.parameters import System
+from camdyn.tribology import contact_conditions, lubrication_regime
 
 __all__ = ["design_map", "AXES"]
 
@@ -122,7 +123,7 @@ def design_map(system: System, axis: str, ratios, speeds, lubricant=None, roughn
                   & layers["regime_ok"])
     score = np.where(admissible & (values["min_contact_force"] >= contact_margin * values["mean_contact_force"]),
                      values["first_harmonic"], -np.inf)
-    if np.isfinite(score).any() and score.max() > -np.inf:
+    if np.isfinite(score).any():
         bi, bj = np.unravel_index(np.argmax(score), shape)
         rec_ratio, rec_speed = float(ratios[bi]), float(speeds[bj])
     else:
@@ -159,13 +160,9 @@ def _point(system, speed, natural_hz, i, j, layers, values, lubricant, roughness
     values["mean_contact_force"][i, j] = fn.mean()
     values["first_harmonic"][i, j] = 2.0 * abs(np.fft.rfft(acc)[1]) / acc.size
     if lubricant is not None and fn.min() > 0:
-        from camdyn.tribology import contact_conditions
-
-        cc = contact_conditions(system, speed, lubricant, roughness, points=points)
+        cc = contact_conditions(system, speed, lubricant, roughness, points=points, kinematics=ik)
         lam = float(np.nanmin(cc["lambda_ratio"].values))
         values["lambda_min"][i, j] = lam
-        from camdyn.tribology import lubrication_regime
-
         layers["regime_ok"][i, j] = regime is None or str(lubrication_regime(lam)) == regime
     else:
         layers["regime_ok"][i, j] = regime is None

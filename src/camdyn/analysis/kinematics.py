@@ -238,9 +238,13 @@ class KinematicCheck:
         return out
 
 
-def check_regime(system: System, speed: float, points: int = 1024) -> KinematicCheck:
-    """Inverse-kinematics check of contact and sliding direction at ``speed`` [Hz]."""
-    ds = inverse_kinematics(system, speed=speed, points=points)
+def check_regime(system: System, speed: float, points: int = 1024,
+                 kinematics: xr.Dataset | None = None) -> KinematicCheck:
+    """Inverse-kinematics check of contact and sliding direction at ``speed`` [Hz].
+
+    ``kinematics`` reuses a result of :func:`inverse_kinematics` at that speed.
+    """
+    ds = kinematics if kinematics is not None else inverse_kinematics(system, speed=speed, points=points)
     vr = ds["sliding_velocity"].values
     reversal = bool(ds.attrs["sliding_reversal"])
     sign = 0 if reversal else int(np.sign(np.median(vr)))

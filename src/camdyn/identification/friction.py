@@ -28,7 +28,7 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import least_squares
 
-from camdyn.analysis.harmonics import estimate_speed, fit_harmonics
+from camdyn.analysis.harmonics import estimate_speed, fit_harmonics, synthesize_harmonics
 from camdyn.analysis.kinematics import check_regime, inverse_kinematics
 from camdyn.errors import IdentificationError, ParameterError
 from camdyn.io.measurements import angular_acceleration, check_record
@@ -119,8 +119,6 @@ def _rebuild(coef: np.ndarray, orders: int, omega: float, grid: int):
 
 
 def _harmonic_check(name: str, x: np.ndarray, coef: np.ndarray, t: np.ndarray, speed: float) -> tuple[bool, str]:
-    from camdyn.analysis.harmonics import synthesize_harmonics
-
     fit = synthesize_harmonics(coef, speed, t)
     var = float(np.var(x))
     explained = 1.0 - float(np.var(x - fit)) / var if var > 0 else 0.0
@@ -189,7 +187,8 @@ def estimate_friction(system: System, record: xr.Dataset, speed: float | None = 
     checks = {}
     ok, detail = _harmonic_check("alpha_ddot", record["alpha_ddot"].values[keep], coefs["alpha_ddot"], tw, speed)
     checks["periodic"] = {"passed": ok, "detail": detail}
-    kin = check_regime(system, speed)
+    kinematics = inverse_kinematics(system, speed=speed, points=GRID)
+    kin = check_regime(system, speed, kinematics=kinematics)
     checks["contact_kept_kinematics"] = {
         "passed": kin.contact_kept,
         "detail": (f"inverse kinematics: the required normal force stays above {kin.min_contact_force:.3g} N"
@@ -205,7 +204,7 @@ def estimate_friction(system: System, record: xr.Dataset, speed: float | None = 
 
     p = L.pack(system, initial_angle=0.0)
     omega = 2.0 * math.pi * speed
-    alpha_dc = float(inverse_kinematics(system, speed=speed, points=GRID)["alpha"].mean())
+    alpha_dc = float(kinematics["alpha"].mean())
 
     def forces(orders):
         acc, vel, ang = _rebuild(coefs["alpha_ddot"], orders, omega, GRID)

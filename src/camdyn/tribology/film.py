@@ -162,7 +162,8 @@ def lubrication_regime(lam) -> np.ndarray:
 
 
 def contact_conditions(system: System, speed: float | None = None, lubricant: Lubricant | str | None = None,
-                       roughness: tuple[float, float] | str = "ground", points: int = 720) -> xr.Dataset:
+                       roughness: tuple[float, float] | str = "ground", points: int = 720,
+                       kinematics: xr.Dataset | None = None) -> xr.Dataset:
     """Hertz contact, velocities, film thickness and lambda ratio over one revolution,
     from the rigid-contact motion of :func:`camdyn.analysis.kinematics.inverse_kinematics`.
 
@@ -175,6 +176,8 @@ def contact_conditions(system: System, speed: float | None = None, lubricant: Lu
         A :class:`Lubricant` or a bundled name; None leaves the film variables out.
     roughness : (float, float) or str
         rms roughness of cam and follower [m], or a bundled finish name.
+    kinematics : xarray.Dataset, optional
+        A result of ``inverse_kinematics`` at this speed, to reuse.
 
     Returns
     -------
@@ -184,7 +187,7 @@ def contact_conditions(system: System, speed: float | None = None, lubricant: Lu
         ``sliding_velocity``, ``sum_velocity`` [m/s], ``slide_to_roll`` [-], and with a
         lubricant ``film_thickness`` [m], ``lambda_ratio`` [-], ``regime``.
     """
-    ik = inverse_kinematics(system, speed=speed, points=points)
+    ik = kinematics if kinematics is not None else inverse_kinematics(system, speed=speed, points=points)
     fn = np.maximum(ik["Fn"].values, 0.0)
     rho_c = ik["cam_curvature_radius"].values
     e_star = effective_modulus(system)
