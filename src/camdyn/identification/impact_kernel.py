@@ -1,0 +1,197 @@
+"""Compiled kernels of the impact-damping identification (thesis 3.5).
+
+- :func:`simulate_impacts`: simulation S1, many (impact, beta, n) jobs per call, in
+  parallel over jobs (``prange``); each job is one whole hybrid simulation of one impact
+  event by the compiled driver, from contact onset to the end of the event.
+- :func:`return_time`: the free flight of eq 3.9 from the end of contact until the
+  follower angle comes back to a given level (the return-time map of eq 3.19).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from camdyn.core import driver, systems
+from camdyn.model import layout as L
+from camdyn.model.dynamics import evaluate, spring_force_trig, spring_moment_trig
+
+#: Status of a job whose simulation never separated from the cam.
+STATUS_NO_SEPARATION = 100
+
+
+@numba.njit(cache=True)
+def _free_acceleration(alpha, p):
+    """Free-flight angular acceleration [rad/s^2] (eq 3.9: spring and gravity only)."""
+    ca = math.cos(alpha)
+    sa = math.sin(alpha)
+    fs = spring_force_trig(ca, sa, p)
+    return (p[L.MASS] * p[L.GRAVITY] * p[L.CG] * ca + spring_moment_trig(ca, sa, fs, p)) / p[L.INERTIA]
+
+
+@numba.njit(cache=True)
+def return_time(alpha_start, alpha_dot_start, alpha_target, p, step, t_max):
+    """Time [s] the free follower takes from ``(alpha_start [rad], alpha_dot_start [rad/s])``
+    until its angle comes back to ``alpha_target`` [rad] after turning round.
+
+    Classical Runge-Kutta with the fixed ``step`` [s] (the free flight is smooth and slow
+    against the sampling), the crossing interpolated by a cubic Hermite polynomial. NaN if
+    the follower does not come back within ``t_max`` [s].
+    """
+    a = alpha_start
+    v = alpha_dot_start
+    t = 0.0
+    turned = False
+    direction = 1.0 if alpha_dot_start >= 0.0 else -1.0
+    while t < t_max:
+        k1a = v
+        k1v = _free_acceleration(a, p)
+        k2a = v + 0.5 * step * k1v
+        k2v = _free_acceleration(a + 0.5 * step * k1a, p)
+        k3a = v + 0.5 * step * k2v
+        k3v = _free_acceleration(a + 0.5 * step * k2a, p)
+        k4a = v + step * k3v
+        k4v = _free_acceleration(a + step * k3a, p)
+        a1 = a + step * (k1a + 2.0 * k2a + 2.0 * k3a + k4a) / 6.0
+        v1 = v + step * (k1v + 2.0 * k2v + 2.0 * k3v + k4v) / 6.0
+        if not turned and v1 * direction < 0.0:
+            turned = True
+        if turned and (a1 - alpha_target) * direction <= 0.0 < (a - alpha_target) * direction:
+            # cubic Hermite on [t, t + step]; bisection for its root
+            lo, hi = 0.0, 1.0
+            for _ in range(60):
+                s = 0.5 * (lo + hi)
+                h00 = 2 * s ** 3 - 3 * s ** 2 + 1
+                h10 = s ** 3 - 2 * s ** 2 + s
+                h01 = -2 * s ** 3 + 3 * s ** 2
+                h11 = s ** 3 - s ** 2
+                val = h00 * a + h10 * step * v + h01 * a1 + h11 * step * v1 - alpha_target
+                if val * direction > 0.0:
+                    lo = s
+                else:
+                    hi = s
+            return t + 0.5 * (lo + hi) * step
+        a = a1
+        v = v1
+        t += step
+    return math.nan
+
+
+@numba.njit(parallel=True, cache=True)
+def simulate_impacts(params, impact, beta, exponent, alpha0, alpha_dot0, t_end, offsets, grid_points,
+                     rtol, atol, h_max):
+    """Simulation S1 of impact events, batched.
+
+    Parameters
+    ----------
+    params : ndarray (K, SIZE)
+        Parameter vector of the rig (:mod:`camdyn.model.layout`) for each impact, with the
+        cam angle at onset in the ``THETA0`` slot (impacts of several records may be mixed).
+    impact : ndarray of int (J,)
+        Impact event of each job.
+    beta, exponent : ndarray (J,)
+        Trial damping ``beta`` [N s m^-(n+1)] and exponent ``n`` [-] of each job.
+    alpha0, alpha_dot0 : ndarray (K,)
+        Follower angle [rad] and rate [rad/s] at the onset of each impact.
+    t_end : ndarray (K,)
+        Length of each impact event [s] (onset to the next onset).
+    offsets : ndarray (K, M)
+        Times after onset [s] at which force and penetration are wanted (NaN padded).
+    grid_points : int
+        Samples of the uniform grid on which the peak angle is searched.
+    rtol, atol, h_max : float
+        Tolerances and largest step [s] of the driver.
+
+    Returns
+    -------
+    peak : ndarray (J,)
+        Extreme follower angle after separation, in the direction of separation [rad]
+        (eq 3.22), refined by a parabola through the three grid samples around it.
+    force, penetration : ndarray (J, M)
+        Normal force [N] and penetration [m] at ``offsets``.
+    separation : ndarray (J,)
+        Time of separation after onset [s].
+    status : ndarray of int (J,)
+        0 for success, a driver status, or :data:`STATUS_NO_SEPARATION`.
+    """
+    jobs = impact.shape[0]
+    m = offsets.shape[1]
+    peak = np.full(jobs, np.nan)
+    force = np.full((jobs, m), np.nan)
+    penetration = np.full((jobs, m), np.nan)
+    separation = np.full(jobs, np.nan)
+    status = np.zeros(jobs, dtype=np.int64)
+    for j in numba.prange(jobs):
+        i = impact[j]
+        q = params[i].copy()
+        q[L.BETA] = beta[j]
+        q[L.EXPONENT] = exponent[j]
+        wanted = 0
+        for c in range(m):
+            if math.isfinite(offsets[i, c]):
+                wanted += 1
+        n = grid_points + wanted
+        t_out = np.empty(n)
+        for g in range(grid_points):
+            t_out[g] = t_end[i] * g / (grid_points - 1)
+        for c in range(wanted):
+            t_out[grid_points + c] = min(max(offsets[i, c], 0.0), t_end[i])
+        order = np.argsort(t_out, kind="mergesort")
+        t_sorted = t_out[order]
+        y0 = np.array([alpha0[i], alpha_dot0[i], 0.0])
+        y, modes, events, counters = driver.integrate(
+            systems.CAM_FOLLOWER, q, y0, 0.0, t_end[i], t_sorted, rtol, atol, h_max,
+            driver.METHOD_AUTO, 10_000_000, 256)
+        status[j] = counters[driver.COUNT_STATUS]
+        if status[j] != 0:
+            continue
+        t_sep = math.nan
+        t_next = t_end[i] + 1.0
+        for e in range(events.shape[0]):
+            if events[e, 1] == 0.0 and events[e, 2] < 0.0 and not math.isfinite(t_sep):
+                t_sep = events[e, 0]
+            elif events[e, 1] == 0.0 and events[e, 2] > 0.0 and math.isfinite(t_sep):
+                t_next = events[e, 0]
+                break
+        if not math.isfinite(t_sep):
+            status[j] = STATUS_NO_SEPARATION
+            continue
+        separation[j] = t_sep
+        # forces and penetration at the wanted offsets
+        for r in range(n):
+            c = order[r] - grid_points
+            if c >= 0:
+                res = evaluate(t_sorted[r], y[r, 0], y[r, 1], modes[r], q)
+                force[j, c] = res[1]
+                penetration[j, c] = res[5]
+        # extreme angle in free flight, in the direction of separation
+        direction = 1.0
+        best = -1
+        best_val = -np.inf
+        for r in range(n):
+            if order[r] < grid_points and t_sep < t_sorted[r] < t_next:
+                if best < 0:
+                    direction = 1.0 if y[r, 1] >= 0.0 else -1.0
+                val = direction * y[r, 0]
+                if val > best_val:
+                    best_val = val
+                    best = r
+        if best < 0:
+            status[j] = STATUS_NO_SEPARATION
+            continue
+        # parabola through the neighbouring grid samples
+        lo = best - 1
+        while lo >= 0 and order[lo] >= grid_points:
+            lo -= 1
+        hi = best + 1
+        while hi < n and order[hi] >= grid_points:
+            hi += 1
+        if lo >= 0 and hi < n:
+            y0v, y1v, y2v = direction * y[lo, 0], best_val, direction * y[hi, 0]
+            den = y0v - 2.0 * y1v + y2v
+            if den < 0.0:
+                best_val = y1v - 0.125 * (y0v - y2v) ** 2 / den
+        peak[j] = direction * best_val
+    return peak, force, penetration, separation, status
