@@ -313,7 +313,11 @@ def impact_events(system: System, record: xr.Dataset, speed: float | None = None
         k0, k1 = starts[i], starts[i + 1]
         u, v, x, length, alpha_dot0 = _reconstruct(acc, k0, k1, leads[i], leads[i + 1], tau)
         k_end = min(stops[i] - k0, x.size - 3)
-        c = _angle_constant(p, x[k_end], v[k_end], length - u[k_end])
+        # the return-time map starts a tenth of the flight after the detected end of
+        # contact: a heavily damped contact ends with a long low-force tail that the
+        # detection cannot see, and the map needs a state in true free flight
+        k_free = k_end + (x.size - k_end) // 10
+        c = _angle_constant(p, x[k_free], v[k_free], length - u[k_free])
         alpha = x + c
         direction = 1.0 if v[k_end] >= 0 else -1.0
         theta0 = _onset_cam_angle(p, c, alpha_dot0, theta_dot)
