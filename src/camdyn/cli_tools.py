@@ -64,15 +64,25 @@ def synthesize(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                settle: float = typer.Option(20.0, help="Revolutions simulated and dropped first (transient)."),
                seed: int = typer.Option(0, help="Noise seed."),
                channels: str = typer.Option("Nx,Ny,alpha_ddot", help="Channels: Nx, Ny, alpha_ddot, a_t."),
+               restitution_gamma: Optional[str] = typer.Option(
+                   None, "--restitution-gamma", help="Simulate instantaneous impacts xi = 1 - gamma v_a "
+                                                     "(simulation S3) with this gamma, e.g. 0.8s/m; "
+                                                     "records alpha_ddot only."),
                out: Path = typer.Option(..., help="Output file: .csv, .nc or .uff.")):
     """Simulate a measurement record (steady state, optional noise) and write it."""
     from camdyn.io.measurements import write_measurement
     from camdyn.synthesis import synthesize as make
+    from camdyn.synthesis import synthesize_impact_map
 
     system = _system(source, set_)
     rate = _hertz(sample_rate)
-    rec = make(system, parse_speed(speed) if speed else None, revolutions=revolutions, sample_rate=rate,
-               noise=noise, settle=settle, seed=seed, channels=tuple(c.strip() for c in channels.split(",")))
+    if restitution_gamma is not None:
+        gamma = parse_quantity(restitution_gamma, "s/m", "restitution gamma")
+        rec = synthesize_impact_map(system, parse_speed(speed) if speed else None, revolutions=revolutions,
+                                    sample_rate=rate, gamma=gamma, noise=noise, settle=settle, seed=seed)
+    else:
+        rec = make(system, parse_speed(speed) if speed else None, revolutions=revolutions, sample_rate=rate,
+                   noise=noise, settle=settle, seed=seed, channels=tuple(c.strip() for c in channels.split(",")))
     path = write_measurement(rec, out)
     console.print(f"wrote {path} ({rec.sizes['time']} samples at {rate:g} Hz, "
                   f"{revolutions:g} revolutions at {rec.attrs['speed_hz']:g} Hz, noise {noise:g})")
@@ -253,6 +263,8 @@ def design(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
 
 def register(app: typer.Typer) -> None:
     """Add these commands to the main app."""
+    import camdyn.cli_impact  # noqa: F401  (registers the impact commands on identify_app)
+
     app.add_typer(identify_app, name="identify")
     app.command("synthesize")(synthesize)
     app.command("synthesize-impulse")(synthesize_impulse)

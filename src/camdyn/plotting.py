@@ -149,3 +149,60 @@ def plot_accelerance(frequency, response, estimate, path: str | Path) -> Path:
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
     return _save(fig, path)
+
+
+def plot_impact_fit(estimate, path: str | Path, impact: int = 0) -> Path:
+    """Contact force of one impact, measured (force balance, eq 3.21) against simulation
+    S1 at the estimate: over time, and as a hysteresis loop over the penetration (figs
+    3.4, 3.7, 3.8)."""
+    prob = estimate.problem
+    k = int(np.clip(impact, 0, prob.count - 1))
+    res = prob.residues(np.array([k]), np.array([estimate.beta]), np.array([estimate.exponent]))
+    u = prob.offsets[k] * 1e6
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    axes[0].plot(u, prob.force[k], "o", ms=3, color="C0", label="measured (force balance)")
+    axes[0].plot(u, res["force"][0], "-", color="C3", label="simulation S1 at the estimate")
+    axes[0].set_xlabel("time after onset [us]")
+    axes[0].set_ylabel("normal contact force [N]")
+    axes[0].legend()
+    axes[1].plot(prob.penetration[k] * 1e6, prob.force[k], "o", ms=3, color="C0", label="measured")
+    axes[1].plot(res["penetration"][0] * 1e6, res["force"][0], "-", color="C3", label="simulation S1")
+    axes[1].set_xlabel("penetration [um]")
+    axes[1].set_ylabel("normal contact force [N]")
+    axes[1].set_title(f"beta = {estimate.beta:.4g} {estimate.beta_units}, n = {estimate.exponent:.4g}")
+    axes[1].legend()
+    return _save(fig, path)
+
+
+def plot_residue_landscape(landscape: xr.DataArray, estimate, path: str | Path) -> Path:
+    """Mean |Lambda| per impact over (n, beta), with the estimate and the bootstrap
+    replicates: the (beta, n) valley of thesis 3.7."""
+    ns = landscape["exponent"].values
+    beta = landscape["beta"].values
+    fig, ax = plt.subplots(figsize=(7, 5))
+    nn = np.repeat(ns[:, None], beta.shape[1], axis=1)
+    mesh = ax.pcolormesh(nn, np.log10(beta), np.log10(landscape.values + 1e-16), shading="auto", cmap="viridis")
+    fig.colorbar(mesh, ax=ax, label=f"log10 {landscape.attrs.get('long_name', 'residue')}")
+    if estimate.bootstrap.size:
+        ax.plot(estimate.bootstrap[:, 1], np.log10(estimate.bootstrap[:, 0]), ".", color="w", ms=3,
+                label="bootstrap replicates")
+    ax.plot([estimate.exponent], [np.log10(estimate.beta)], "r*", ms=12, label="estimate")
+    ax.set_xlabel("damping exponent n [-]")
+    ax.set_ylabel("log10 beta [N s m^-(n+1)]")
+    ax.legend(loc="upper left")
+    return _save(fig, path)
+
+
+def plot_restitution(estimate, path: str | Path) -> Path:
+    """Coefficient of restitution of each impact against its approach velocity, with the
+    fitted ``xi = 1 - gamma v_a`` (figs 3.9, 3.10)."""
+    v = estimate.approach_velocity
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    ax.plot(v, estimate.restitution, "o", ms=4, label="impacts")
+    grid = np.linspace(0.0, max(v.max() * 1.1, 1e-3), 50)
+    ax.plot(grid, 1.0 - estimate.gamma * grid, "-", color="C3",
+            label=f"xi = 1 - gamma v_a, gamma = {estimate.gamma:.4g} s/m")
+    ax.set_xlabel("approach velocity v_a [m/s]")
+    ax.set_ylabel("coefficient of restitution xi [-]")
+    ax.legend()
+    return _save(fig, path)

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 from scipy.integrate import cumulative_simpson, simpson
-from scipy.optimize import brentq
+from scipy.optimize import brentq, minimize_scalar
 
 from camdyn.errors import IdentificationError, ParameterError
 from camdyn.geometry import contact_kinematics
@@ -152,22 +152,35 @@ def _onset_lead(acc: np.ndarray, k0: int, tau: float) -> float:
     return float(min(tau, ratio * tau / (1.0 - ratio)))
 
 
-def _onset_cam_angle(p: np.ndarray, alpha0: float, alpha_dot0: float, theta_dot: float) -> float:
+def _onset_cam_angle(p: np.ndarray, alpha0: float, alpha_dot0: float, theta_dot: float) -> tuple[float, float]:
     """Cam angle [rad] at which the follower at ``alpha0`` just touches the cam (eq 3.5
-    with zero penetration), choosing the root at which the cam approaches fastest."""
+    with zero penetration), choosing the root at which the cam approaches fastest.
+
+    Impacts near the cam's highest lift are sensitive: an angle reconstructed a few
+    micro-radians beyond the cam's reach has no root. Then the cam angle of highest lift
+    is taken and the angle moved onto the cam, if the move is small (under 2 % of the
+    runout, as a moment about the pivot); returns ``(Theta(0), alpha(0))``.
+    """
+    touch = lambda th, a=alpha0: contact_kinematics(a, 0.0, th, 0.0, p)[0]
     grid = np.linspace(0.0, 2.0 * math.pi, 181)
-    delta = np.array([contact_kinematics(alpha0, 0.0, th, 0.0, p)[0] for th in grid])
+    delta = np.array([touch(th) for th in grid])
     roots = []
     for k in np.flatnonzero(np.sign(delta[:-1]) != np.sign(delta[1:])):
-        th = brentq(lambda x: contact_kinematics(alpha0, 0.0, x, 0.0, p)[0], grid[k], grid[k + 1],
-                    xtol=1e-14, rtol=1e-14)
+        th = brentq(touch, grid[k], grid[k + 1], xtol=1e-14, rtol=1e-14)
         rate = contact_kinematics(alpha0, alpha_dot0, th, theta_dot, p)[1]
         roots.append((rate, th))
-    if not roots:
+    if roots:
+        return max(roots)[1], alpha0
+    k = int(np.argmax(delta))
+    best = minimize_scalar(lambda th: -touch(th), bracket=(grid[k] - 0.05, grid[k], grid[k] + 0.05))
+    gap = -float(-best.fun)
+    chi = contact_kinematics(alpha0, 0.0, best.x, 0.0, p)[2]
+    if gap > 0.02 * p[L.RUNOUT] + 1e-7:
         raise IdentificationError(
-            f"at the reconstructed onset angle {alpha0:.5g} rad the follower cannot touch the cam; "
-            "the record does not match the rig's geometry (check cam.runout and the speed)")
-    return max(roots)[1]
+            f"at the reconstructed onset angle {alpha0:.5g} rad the follower cannot touch the cam "
+            f"(it stays {gap * 1e6:.3g} um away); the record does not match the rig's geometry "
+            "(check cam.runout and the speed)")
+    return float(best.x), alpha0 - gap / chi
 
 
 def _angle_constant(p, x_start, v_start, t_flight):
@@ -320,8 +333,9 @@ def impact_events(system: System, record: xr.Dataset, speed: float | None = None
         c = _angle_constant(p, x[k_free], v[k_free], length - u[k_free])
         alpha = x + c
         direction = 1.0 if v[k_end] >= 0 else -1.0
-        theta0 = _onset_cam_angle(p, c, alpha_dot0, theta_dot)
-        fields["alpha0"][i] = c
+        theta0, alpha0 = _onset_cam_angle(p, c, alpha_dot0, theta_dot)
+        alpha = alpha + (alpha0 - c)
+        fields["alpha0"][i] = alpha0
         fields["alpha_dot0"][i] = alpha_dot0
         fields["alpha_ddot0"][i] = acc[k0 - 1] if k0 > 0 else acc[k0]
         fields["theta0"][i] = theta0

@@ -16,19 +16,10 @@ import numpy as np
 
 from camdyn.core import driver, systems
 from camdyn.model import layout as L
-from camdyn.model.dynamics import evaluate, spring_force_trig, spring_moment_trig
+from camdyn.model.dynamics import evaluate, free_acceleration
 
 #: Status of a job whose simulation never separated from the cam.
 STATUS_NO_SEPARATION = 100
-
-
-@numba.njit(cache=True)
-def _free_acceleration(alpha, p):
-    """Free-flight angular acceleration [rad/s^2] (eq 3.9: spring and gravity only)."""
-    ca = math.cos(alpha)
-    sa = math.sin(alpha)
-    fs = spring_force_trig(ca, sa, p)
-    return (p[L.MASS] * p[L.GRAVITY] * p[L.CG] * ca + spring_moment_trig(ca, sa, fs, p)) / p[L.INERTIA]
 
 
 @numba.njit(cache=True)
@@ -47,13 +38,13 @@ def return_time(alpha_start, alpha_dot_start, alpha_target, p, step, t_max):
     direction = 1.0 if alpha_dot_start >= 0.0 else -1.0
     while t < t_max:
         k1a = v
-        k1v = _free_acceleration(a, p)
+        k1v = free_acceleration(a, p)
         k2a = v + 0.5 * step * k1v
-        k2v = _free_acceleration(a + 0.5 * step * k1a, p)
+        k2v = free_acceleration(a + 0.5 * step * k1a, p)
         k3a = v + 0.5 * step * k2v
-        k3v = _free_acceleration(a + 0.5 * step * k2a, p)
+        k3v = free_acceleration(a + 0.5 * step * k2a, p)
         k4a = v + step * k3v
-        k4v = _free_acceleration(a + step * k3a, p)
+        k4v = free_acceleration(a + step * k3a, p)
         a1 = a + step * (k1a + 2.0 * k2a + 2.0 * k3a + k4a) / 6.0
         v1 = v + step * (k1v + 2.0 * k2v + 2.0 * k3v + k4v) / 6.0
         if not turned and v1 * direction < 0.0:

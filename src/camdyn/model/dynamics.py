@@ -180,3 +180,13 @@ def jacobian(t, y, f0, mode, p, jac):
     jac[1] = (res_v[0] - res0[0]) / eps_v
     jac[2] = j20
     jac[3] = (res_v[10] - res0[10]) / eps_v
+
+
+@numba.njit(cache=True)
+def free_acceleration(alpha, p):
+    """Angular acceleration [rad/s^2] of the free follower at ``alpha`` [rad] (eq 3.9:
+    spring and gravity, no contact)."""
+    ca = math.cos(alpha)
+    sa = math.sin(alpha)
+    fs = spring_force_trig(ca, sa, p)
+    return (p[L.MASS] * p[L.GRAVITY] * p[L.CG] * ca + spring_moment_trig(ca, sa, fs, p)) / p[L.INERTIA]

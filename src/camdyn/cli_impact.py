@@ -1,0 +1,123 @@
+"""CLI commands of the impact studies (thesis chapter 3): ``camdyn identify
+impact-damping`` and ``camdyn identify restitution``, registered on the ``identify``
+group by :mod:`camdyn.cli_tools`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import List, Optional
+
+import typer
+from rich.table import Table
+
+from camdyn.cli_tools import SetOption, _print_json, _system, console, identify_app
+from camdyn.errors import ParameterError
+from camdyn.units import parse_quantity, parse_speed
+
+
+def _per_record(values: Optional[List[str]], count: int, what: str, parse) -> list:
+    if not values:
+        return [None] * count
+    out = [parse(v) for v in values]
+    if len(out) == 1:
+        return out * count
+    if len(out) != count:
+        raise ParameterError(f"give one {what} for all records or one per record ({count}), got {len(out)}")
+    return out
+
+
+@identify_app.command("impact-damping")
+def identify_impact_damping(
+        source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
+        data: List[Path] = typer.Argument(..., help="Records (one per operating point): Nx, Ny, alpha_ddot or a_t."),
+        set_: Optional[List[str]] = SetOption,
+        speed: Optional[List[str]] = typer.Option(None, help="Cam speed (once, or once per record); default "
+                                                             "from each file's metadata."),
+        runout: Optional[List[str]] = typer.Option(None, help="Cam runout e (once, or per record); default from "
+                                                              "each file's metadata, else the preset's."),
+        fix_n: Optional[float] = typer.Option(None, "--fix-n", help="Fix the exponent n (e.g. 1.5, 1.45; "
+                                                                    "0 = viscous)."),
+        residue: Optional[str] = typer.Option(None, help="Residue minimised: lambda1, lambda2, lambda3 or combined "
+                                                         "(default lambda1 with n fixed, combined with n free)."),
+        bootstrap: int = typer.Option(64, help="Bootstrap replicates over impacts (0: none)."),
+        plot_dir: Optional[Path] = typer.Option(None, "--plot-dir", help="Write the force, hysteresis and "
+                                                                         "residue-landscape figures here."),
+        json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
+    """Impact damping beta, n of Fn = K delta^1.5 + beta delta^n delta_dot (thesis 3.5)."""
+    from camdyn.identification.impact_damping import estimate_impact_damping, residue_landscape
+    from camdyn.io.measurements import read_measurement
+
+    system = _system(source, set_)
+    records = [read_measurement(p) for p in data]
+    speeds = _per_record(speed, len(records), "speed", lambda s: parse_speed(s))
+    runouts = _per_record(runout, len(records), "runout", lambda s: parse_quantity(s, "m", "cam.runout"))
+    with console.status("identifying the impact damping ...") if not json_out else _Quiet():
+        est = estimate_impact_damping(system, records, speed=speeds, runout=runouts, exponent=fix_n,
+                                      residue=residue, bootstrap=bootstrap)
+    figures = []
+    if plot_dir is not None:
+        from camdyn.plotting import plot_impact_fit, plot_residue_landscape
+        figures.append(str(plot_impact_fit(est, Path(plot_dir) / "impact_force.png")))
+        if est.mode == "free":
+            land = residue_landscape(est, points=15)
+            figures.append(str(plot_residue_landscape(land, est, Path(plot_dir) / "residue_landscape.png")))
+    if json_out:
+        out = est.to_dict()
+        out["figures"] = figures
+        _print_json(out)
+        return
+    table = Table("quantity", "value", "95 % bootstrap interval")
+    ci = est.confidence
+    table.add_row("beta", f"{est.beta:.5g} {est.beta_units}", f"{ci['beta'][0]:.4g} - {ci['beta'][1]:.4g}")
+    table.add_row("n", f"{est.exponent:.5g}" + (" (fixed)" if est.mode != "free" else ""),
+                  f"{ci['n'][0]:.4g} - {ci['n'][1]:.4g}")
+    table.add_row("damping at the peak penetration", f"{est.damping_at_peak:.5g} N*s/m",
+                  f"{ci['damping_at_peak'][0]:.4g} - {ci['damping_at_peak'][1]:.4g}")
+    table.add_row("peak penetration", f"{est.peak_penetration * 1e6:.4g} um", "")
+    for name, value in est.residues.items():
+        table.add_row(f"mean |{name}| per impact", f"{value:.3g}", "")
+    table.add_row("impacts used", f"{est.impacts_used} from {est.records} record(s)", "")
+    console.print(table)
+    for f in figures:
+        console.print(f"figure: {f}")
+
+
+class _Quiet:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+@identify_app.command("restitution")
+def identify_restitution(
+        source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
+        data: Path = typer.Argument(..., help="Record with alpha_ddot or a_t (forces not needed)."),
+        set_: Optional[List[str]] = SetOption,
+        speed: Optional[str] = typer.Option(None, help="Cam speed; default from the file's metadata."),
+        plot: Optional[Path] = typer.Option(None, help="Write the xi against v_a figure here."),
+        json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
+    """Equivalent restitution xi = 1 - gamma v_a and its Hunt-Crossley damping (thesis 3.8)."""
+    from camdyn.identification.restitution import estimate_restitution
+    from camdyn.io.measurements import read_measurement
+
+    system = _system(source, set_)
+    est = estimate_restitution(system, read_measurement(data), speed=parse_speed(speed) if speed else None)
+    if plot is not None:
+        from camdyn.plotting import plot_restitution
+        plot_restitution(est, plot)
+    if json_out:
+        _print_json(est.to_dict())
+        return
+    table = Table("quantity", "value")
+    table.add_row("gamma", f"{est.gamma:.5g} s/m")
+    table.add_row("Hunt-Crossley beta = 1.5 gamma K", f"{est.beta_hunt_crossley:.5g} N*s/m^2.5")
+    table.add_row("Hertz coefficient K", f"{est.stiffness:.5g} N/m^1.5")
+    table.add_row("mean restitution xi", f"{est.mean_restitution:.4g}")
+    table.add_row("mean approach velocity", f"{est.approach_velocity.mean():.4g} m/s")
+    table.add_row("rms misfit of xi", f"{est.residual:.3g}")
+    table.add_row("impacts used", str(est.impacts_used))
+    console.print(table)
+    if plot is not None:
+        console.print(f"figure: {plot}")
