@@ -68,3 +68,46 @@ def test_cli_tools_bad_input(args, words):
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and words in lines[0], proc.stderr
+
+
+def test_identify_impact_damping_and_restitution(tmp_path, capsys):
+    """Issue 6 CLI: synthesize at 204.8 kHz with 1 % noise, identify with n fixed (JSON
+    keys of the issue), two records jointly with figures, and the restitution of an S3
+    record."""
+    a, b, s3 = tmp_path / "e20.nc", tmp_path / "e25.csv", tmp_path / "s3.nc"
+    for path, runout in ((a, "3.5mm"), (b, "4.375mm")):
+        assert main(["synthesize", "sundar2014-impact", "--set", f"cam.runout={runout}", "--speed", "15Hz",
+                     "--revolutions", "11", "--sample-rate", "204.8kHz", "--noise", "0.01", "--settle", "60",
+                     "--out", str(path)]) == 0
+    capsys.readouterr()
+    assert main(["identify", "impact-damping", "sundar2014-impact", str(a), "--fix-n", "1.5", "--bootstrap", "8",
+                 "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    for key in ("beta", "n", "residue", "impacts_used", "damping_at_peak", "peak_penetration"):
+        assert key in out
+    assert out["n"] == 1.5 and out["impacts_used"] == 10
+    assert out["beta"] == pytest.approx(24.7e9, rel=0.05)
+    plots = tmp_path / "figs"
+    assert main(["identify", "impact-damping", "sundar2014-impact", str(a), str(b), "--bootstrap", "0",
+                 "--plot-dir", str(plots)]) == 0
+    assert (plots / "impact_force.png").is_file() and (plots / "residue_landscape.png").is_file()
+    assert main(["synthesize", "sundar2014-impact", "--set", "cam.runout=4.375mm", "--speed", "15Hz",
+                 "--revolutions", "11", "--sample-rate", "204.8kHz", "--restitution-gamma", "0.8s/m",
+                 "--out", str(s3)]) == 0
+    capsys.readouterr()
+    assert main(["identify", "restitution", "sundar2014-impact", str(s3), "--plot", str(tmp_path / "xi.png"),
+                 "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["gamma"] == pytest.approx(0.8, rel=0.05)
+    assert out["beta_hunt_crossley"] == pytest.approx(1.5 * out["gamma"] * out["stiffness"])
+
+
+def test_identify_impact_damping_refusal_is_one_line(tmp_path):
+    data = tmp_path / "slow.nc"
+    assert main(["synthesize", "sundar2014-impact", "--set", "cam.runout=4.375mm", "--speed", "15Hz",
+                 "--revolutions", "8", "--sample-rate", "20kHz", "--settle", "60", "--out", str(data)]) == 0
+    proc = run_cli("identify", "impact-damping", "sundar2014-impact", str(data))
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines() + proc.stdout.strip().splitlines()
+    assert len([line for line in lines if line.strip()]) == 1
+    assert "too low to resolve the contact" in proc.stderr + proc.stdout

@@ -84,8 +84,9 @@ def _noise_level(a: np.ndarray) -> float:
 def detect_contacts(alpha_ddot: np.ndarray, sample_rate: float, period: float) -> tuple[np.ndarray, np.ndarray, float]:
     """Contact windows ``(start, stop)`` (sample indices, stop exclusive) in ``alpha_ddot``.
 
-    A contact is where the acceleration departs from its free-flight level by more than a
-    threshold (the larger of 8 noise deviations and 2 % of the largest departure); each
+    A record whose largest departure from the median is under 10 times the median
+    departure has no impulsive events. A contact is where the acceleration departs from
+    its free-flight level by more than a threshold (the larger of 8 noise deviations and 2 % of the largest departure); each
     window is then widened while the departure from the local free-flight level stays
     above 3 noise deviations (at least 0.1 % of the largest departure, which a noise-free
     record needs: its free-flight acceleration drifts). Windows closer than 0.2 % of the cam period are merged.
@@ -97,7 +98,9 @@ def detect_contacts(alpha_ddot: np.ndarray, sample_rate: float, period: float) -
     top = float(excess.max())
     threshold = max(8.0 * noise, 0.02 * top)
     hot = np.flatnonzero(excess > threshold)
-    if hot.size == 0 or top <= 0:
+    # impacts are short pulses standing far out of the free-flight acceleration
+    crest = top / max(float(np.median(excess)), 1e-300)
+    if hot.size == 0 or top <= 0 or crest < 10.0:
         return np.empty(0, int), np.empty(0, int), noise
     gap = max(3, int(0.002 * period * sample_rate))
     breaks = np.flatnonzero(np.diff(hot) > gap)
