@@ -4,6 +4,7 @@ group by :mod:`camdyn.cli_tools`."""
 
 from __future__ import annotations
 
+from contextlib import nullcontext
 from pathlib import Path
 from typing import List, Optional
 
@@ -51,7 +52,7 @@ def identify_impact_damping(
     records = [read_measurement(p) for p in data]
     speeds = _per_record(speed, len(records), "speed", lambda s: parse_speed(s))
     runouts = _per_record(runout, len(records), "runout", lambda s: parse_quantity(s, "m", "cam.runout"))
-    with console.status("identifying the impact damping ...") if not json_out else _Quiet():
+    with console.status("identifying the impact damping ...") if not json_out else nullcontext():
         est = estimate_impact_damping(system, records, speed=speeds, runout=runouts, exponent=fix_n,
                                       residue=residue, bootstrap=bootstrap)
     figures = []
@@ -80,14 +81,6 @@ def identify_impact_damping(
     console.print(table)
     for f in figures:
         console.print(f"figure: {f}")
-
-
-class _Quiet:
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        return False
 
 
 @identify_app.command("restitution")
