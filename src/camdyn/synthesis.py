@@ -15,6 +15,13 @@ from camdyn.simulation import simulate
 __all__ = ["synthesize", "synthesize_impact_map"]
 
 
+def _check_noise_and_settle(noise: float, settle: float) -> None:
+    if not (math.isfinite(noise) and noise >= 0):
+        raise ParameterError(f"noise must be a non-negative fraction, got {noise!r}")
+    if not (math.isfinite(settle) and settle >= 0):
+        raise ParameterError(f"settle must be a non-negative number of revolutions, got {settle!r}")
+
+
 def synthesize(system: System, speed: float | None = None, revolutions: float = 40.0, sample_rate: float = 20e3,
                noise: float = 0.0, settle: float = 20.0, seed: int | None = 0,
                channels=("Nx", "Ny", "alpha_ddot"), transducer_angle: float = 0.0) -> xr.Dataset:
@@ -49,10 +56,7 @@ def synthesize(system: System, speed: float | None = None, revolutions: float = 
         true forces of the simulation (DC included), attributes ``speed_hz``, ``runout``,
         ``preset`` and ``noise``.
     """
-    if not (math.isfinite(noise) and noise >= 0):
-        raise ParameterError(f"noise must be a non-negative fraction, got {noise!r}")
-    if not (math.isfinite(settle) and settle >= 0):
-        raise ParameterError(f"settle must be a non-negative number of revolutions, got {settle!r}")
+    _check_noise_and_settle(noise, settle)
     if speed is not None:
         system = system.with_values(**{"motion.speed": float(speed)})
     ds = simulate(system, revolutions=settle + revolutions, sample_rate=sample_rate)
@@ -101,8 +105,7 @@ def synthesize_impact_map(system: System, speed: float | None = None, revolution
     """
     from camdyn.impact_map import simulate_impact_map
 
-    if not (math.isfinite(noise) and noise >= 0):
-        raise ParameterError(f"noise must be a non-negative fraction, got {noise!r}")
+    _check_noise_and_settle(noise, settle)
     if speed is not None:
         system = system.with_values(**{"motion.speed": float(speed)})
     ds = simulate_impact_map(system, revolutions=settle + revolutions, gamma=gamma, sample_rate=sample_rate)
@@ -111,10 +114,9 @@ def synthesize_impact_map(system: System, speed: float | None = None, revolution
     tau = 1.0 / sample_rate
     width = pulse_samples * tau
     for t_hit, jump in zip(ds["impact_time"].values, ds["impact_rate_jump"].values):
-        start = t_hit
-        k0 = max(0, int(math.ceil(start * sample_rate - 1e-9)))
+        k0 = max(0, int(math.ceil(t_hit * sample_rate - 1e-9)))
         ks = np.arange(k0, min(k0 + pulse_samples + 1, t.size))
-        shape = np.where((t[ks] - start) < width, 1.0 - np.cos(2 * math.pi * (t[ks] - start) / width), 0.0)
+        shape = np.where((t[ks] - t_hit) < width, 1.0 - np.cos(2 * math.pi * (t[ks] - t_hit) / width), 0.0)
         acc[ks] += jump * shape / width       # the continuous pulse's area is the jump
     keep = t >= settle / system.motion.speed - 0.5 * tau
     t = t[keep] - t[keep][0]

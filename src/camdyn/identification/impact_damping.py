@@ -25,13 +25,14 @@ steps from the estimate.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import xarray as xr
 from scipy.optimize import least_squares
 
 from camdyn.errors import IdentificationError, ParameterError
+from camdyn.geometry import cam_angle, contact_kinematics
 from camdyn.identification.impact_events import ImpactEvents, impact_events
 from camdyn.identification.impact_kernel import simulate_impacts
 from camdyn.model import layout as L
@@ -206,8 +207,7 @@ def estimate_impact_damping(system, records, speed=None, runout=None, exponent: 
             if progress:
                 progress(f"record {len(events)}/{n_rec}: {events[-1].count} impacts")
     else:
-        events = [type(e)(**{**e.__dict__, "system": e.system.with_values(**{"contact.damping": "power"})})
-                  for e in events]
+        events = [replace(e, system=e.system.with_values(**{"contact.damping": "power"})) for e in events]
     prob = ImpactProblem(events)
     k = prob.count
     reference = float(np.nanmedian(np.nanmax(prob.penetration, axis=1)))
@@ -340,7 +340,6 @@ def _per_impact_beta(prob: ImpactProblem, n: float, beta: float, iterations: int
 
 def _approach(prob: ImpactProblem) -> np.ndarray:
     """Approach velocity [m/s] at onset of each impact, from the reconstructed state."""
-    from camdyn.geometry import cam_angle, contact_kinematics
     out = np.empty(prob.count)
     for i in range(prob.count):
         q = prob.params[i]

@@ -32,7 +32,7 @@ from scipy.optimize import brentq, minimize_scalar
 
 from camdyn.errors import IdentificationError, ParameterError
 from camdyn.geometry import contact_kinematics
-from camdyn.identification.impact_kernel import return_time
+from camdyn.identification.impact_kernel import parabola_peak, return_time
 from camdyn.io.measurements import angular_acceleration, check_record
 from camdyn.model import layout as L
 from camdyn.model.outputs import contact_forces_from_reaction
@@ -63,7 +63,6 @@ class ImpactEvents:
     alpha_ddot0: np.ndarray           # alpha_ddot at onset [rad/s^2]
     theta0: np.ndarray                # cam angle at onset [rad]
     peak: np.ndarray                  # alpha_m: extreme angle of the free flight [rad] (eq 3.22)
-    swing: np.ndarray                 # peak - alpha0 [rad]
     offsets: np.ndarray               # (K, M) contact samples after onset [s], NaN padded
     force: np.ndarray                 # (K, M) contact force from the force balance [N] (eq 3.21)
     penetration: np.ndarray           # (K, M) penetration psi from the reconstructed angle [m]
@@ -74,6 +73,11 @@ class ImpactEvents:
     @property
     def count(self) -> int:
         return int(self.onset_time.size)
+
+    @property
+    def swing(self) -> np.ndarray:
+        """``alpha_m - alpha(0)`` [rad]: the free flight's excursion from the onset angle."""
+        return self.peak - self.alpha0
 
 
 def _noise_level(a: np.ndarray) -> float:
@@ -86,10 +90,11 @@ def detect_contacts(alpha_ddot: np.ndarray, sample_rate: float, period: float) -
 
     A record whose largest departure from the median is under 10 times the median
     departure has no impulsive events. A contact is where the acceleration departs from
-    its free-flight level by more than a threshold (the larger of 8 noise deviations and 2 % of the largest departure); each
-    window is then widened while the departure from the local free-flight level stays
-    above 3 noise deviations (at least 0.1 % of the largest departure, which a noise-free
-    record needs: its free-flight acceleration drifts). Windows closer than 0.2 % of the cam period are merged.
+    its free-flight level by more than a threshold (the larger of 8 noise deviations and
+    2 % of the largest departure); each window is then widened while the departure from
+    the local free-flight level stays above 3 noise deviations (at least 0.1 % of the
+    largest departure, which a noise-free record needs: its free-flight acceleration
+    drifts). Windows closer than 0.2 % of the cam period are merged.
     """
     a = np.asarray(alpha_ddot, dtype=float)
     level = float(np.median(a))
@@ -130,10 +135,13 @@ def _peak(x: np.ndarray, direction: float) -> float:
     k = int(np.argmax(v))
     best = v[k]
     if 0 < k < v.size - 1:
-        den = v[k - 1] - 2 * v[k] + v[k + 1]
-        if den < 0:
-            best = v[k] - 0.125 * (v[k - 1] - v[k + 1]) ** 2 / den
+        best = parabola_peak(v[k - 1], v[k], v[k + 1])
     return direction * best
+
+
+def _free_before(acc: np.ndarray, k0: int) -> float:
+    """Free-flight acceleration [rad/s^2] just before the contact that starts at sample ``k0``."""
+    return float(acc[k0 - 1]) if k0 > 0 else float(acc[k0])
 
 
 def _onset_lead(acc: np.ndarray, k0: int, tau: float) -> float:
@@ -144,7 +152,7 @@ def _onset_lead(acc: np.ndarray, k0: int, tau: float) -> float:
     ratio of the excesses at samples ``k0`` and ``k0 + 1`` gives ``t*``. Without this the
     simulated impacts start up to one sample late.
     """
-    free = float(acc[k0 - 1]) if k0 > 0 else float(acc[k0])
+    free = _free_before(acc, k0)
     e0 = acc[k0] - free
     e1 = acc[k0 + 1] - free
     if not (e1 != 0 and e0 / e1 > 0):
@@ -222,7 +230,7 @@ def _reconstruct(acc, k0, k1, lead0, lead1, tau):
     """
     a = acc[k0:k1]
     n = a.size
-    free0 = acc[k0 - 1] if k0 > 0 else a[0]
+    free0 = _free_before(acc, k0)
     u = lead0 + tau * np.arange(n)
     length = (n - 1) * tau + lead0 + (tau - lead1)
     tail = length - u[-1]
@@ -340,7 +348,7 @@ def impact_events(system: System, record: xr.Dataset, speed: float | None = None
         alpha = alpha + (alpha0 - c)
         fields["alpha0"][i] = alpha0
         fields["alpha_dot0"][i] = alpha_dot0
-        fields["alpha_ddot0"][i] = acc[k0 - 1] if k0 > 0 else acc[k0]
+        fields["alpha_ddot0"][i] = _free_before(acc, k0)
         fields["theta0"][i] = theta0
         fields["peak"][i] = _peak(alpha[k_end:], direction)
         fields["length"][i] = length
@@ -359,5 +367,5 @@ def impact_events(system: System, record: xr.Dataset, speed: float | None = None
         system=system, speed=speed, sample_interval=tau, onset_time=t[starts[:-1]],
         event_length=fields["length"], contact_length=fields["contact"], alpha0=fields["alpha0"],
         alpha_dot0=fields["alpha_dot0"], alpha_ddot0=fields["alpha_ddot0"], theta0=fields["theta0"],
-        peak=fields["peak"], swing=fields["peak"] - fields["alpha0"], offsets=offsets, force=force,
+        peak=fields["peak"], offsets=offsets, force=force,
         penetration=pen, alpha=alphas, alpha_dot=rates, noise=noise)

@@ -23,6 +23,16 @@ STATUS_NO_SEPARATION = 100
 
 
 @numba.njit(cache=True)
+def parabola_peak(y0, y1, y2):
+    """Extreme value of the parabola through three equally spaced samples whose middle one
+    is the largest; ``y1`` itself when the three are not concave."""
+    den = y0 - 2.0 * y1 + y2
+    if den < 0.0:
+        return y1 - 0.125 * (y0 - y2) ** 2 / den
+    return y1
+
+
+@numba.njit(cache=True)
 def return_time(alpha_start, alpha_dot_start, alpha_target, p, step, t_max):
     """Time [s] the free follower takes from ``(alpha_start [rad], alpha_dot_start [rad/s])``
     until its angle comes back to ``alpha_target`` [rad] after turning round.
@@ -180,9 +190,6 @@ def simulate_impacts(params, impact, beta, exponent, alpha0, alpha_dot0, t_end, 
         while hi < n and order[hi] >= grid_points:
             hi += 1
         if lo >= 0 and hi < n:
-            y0v, y1v, y2v = direction * y[lo, 0], best_val, direction * y[hi, 0]
-            den = y0v - 2.0 * y1v + y2v
-            if den < 0.0:
-                best_val = y1v - 0.125 * (y0v - y2v) ** 2 / den
+            best_val = parabola_peak(direction * y[lo, 0], best_val, direction * y[hi, 0])
         peak[j] = direction * best_val
     return peak, force, penetration, separation, status

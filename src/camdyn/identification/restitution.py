@@ -18,7 +18,6 @@ Hertz coefficient ``K`` of the contact (point: eq 3.11 at the cam's curvature at
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
