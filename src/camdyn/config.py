@@ -230,6 +230,16 @@ def read_table(source: str | Path) -> tuple[dict, str, str]:
     return flat, str(meta_name), str(citation)
 
 
+def system_from_toml(text: str) -> System:
+    """Build a system from TOML text (as written by :func:`system_to_toml`)."""
+    try:
+        flat = flatten(tomllib.loads(text))
+    except tomllib.TOMLDecodeError as exc:
+        raise PresetError(f"system TOML is not valid ({exc})") from None
+    return build_system(flat, name=str(flat.get("preset.name", "custom")),
+                        citation=str(flat.get("preset.citation", "")))
+
+
 def parse_assignments(assignments: list[str] | None) -> dict:
     """Parse ``KEY=VALUE`` strings from the command line."""
     out = {}

@@ -1,0 +1,226 @@
+"""Running a sweep: chunks of points on local worker processes or a Dask cluster, through
+the standard :class:`concurrent.futures.Executor` interface, with a progress bar and a
+checkpoint per finished chunk.
+
+- Local (default): a :class:`~concurrent.futures.ProcessPoolExecutor` of ``workers``
+  processes (default: every core), started with ``spawn`` (numba's threads do not
+  survive ``fork``); each loads the compiled kernel from the on-disk cache once.
+- Dask: ``dask="local"`` starts a ``LocalCluster`` of ``workers`` single-threaded worker
+  processes; ``dask="tcp://HOST:PORT"`` connects to a running scheduler (for example one
+  started by dask-jobqueue on an HPC system, see docs/sweeps.md). The client's executor
+  (``Client.get_executor``) takes the same calls as the local pool, and ``Client.run``
+  warms the compiled code once per worker.
+- Inline: ``workers=0`` runs the chunks in this process, one after another, with the
+  kernel's ``prange`` over the points of a chunk on ``threads`` threads.
+
+Chunks are dealt out dynamically (at most two per worker in flight), which balances
+points of very different cost (free flight against chattering contact) better than a
+static split, and bounds memory: a finished chunk is written to disk and dropped.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import contextlib
+import multiprocessing
+import os
+
+import numba
+import numpy as np
+import xarray as xr
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, \
+    TimeRemainingColumn
+
+from camdyn.core import driver
+from camdyn.errors import CamdynError, ParameterError, SimulationError
+from camdyn.simulation import prepare
+from camdyn.sweeps import kernel
+from camdyn.sweeps import metrics as M
+from camdyn.sweeps.spec import SweepSpec
+from camdyn.sweeps.store import Checkpoint
+
+__all__ = ["compute_chunk", "run_sweep", "default_workers"]
+
+STATUS_OK, STATUS_REFUSED, STATUS_SOLVER = 0, 1, 2
+MAX_STEPS_PER_REVOLUTION = 200_000
+
+
+def default_workers() -> int:
+    """Cores this process may use."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def _warm_worker(threads: int = 1) -> None:
+    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    kernel.warm()
+
+
+def compute_chunk(spec: SweepSpec, chunk: int, threads: int = 1) -> dict:
+    """Simulate chunk ``chunk`` of ``spec`` and return its metric and bookkeeping arrays."""
+    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    start = chunk * spec.chunk
+    stop = min(start + spec.chunk, spec.points)
+    n = stop - start
+    base = spec.base_system()
+    params = None
+    starts = np.zeros((n, 3))
+    periods = np.full(n, np.nan)
+    status = np.zeros(n, dtype=np.int8)
+    failure = [""] * n
+    for i in range(n):
+        try:
+            prep = prepare(base.with_values(**spec.point_values(start + i)))
+            period = prep.system.motion.period
+            if not np.isfinite(period):
+                raise ParameterError("the cam does not move (speed 0)")
+        except (CamdynError, ValueError, ArithmeticError) as exc:
+            status[i] = STATUS_REFUSED
+            failure[i] = f"{type(exc).__name__}: {exc}"
+            continue
+        if params is None:
+            params = np.zeros((n, prep.p.size))
+        params[i] = prep.p
+        starts[i] = prep.y0
+        periods[i] = period
+    if params is None:
+        from camdyn.model.layout import SIZE
+        params = np.zeros((n, SIZE))
+    window, onsets, impact_force, counters = kernel.simulate_points(
+        params, starts, periods, spec.revolutions, spec.discard, spec.samples_per_revolution, spec.rtol,
+        spec.atol, MAX_STEPS_PER_REVOLUTION * spec.revolutions)
+    solver = counters[:, driver.COUNT_STATUS]
+    for i in range(n):
+        if status[i] == STATUS_OK and solver[i] != driver.STATUS_OK:
+            status[i] = STATUS_SOLVER
+            failure[i] = f"SimulationError: {driver.STATUS_MESSAGES[int(solver[i])]}"
+    ok = status == STATUS_OK
+    out = M.compute(window, onsets, impact_force, periods, ok, spec.metrics, spec.harmonics,
+                    spec.samples_per_revolution)
+    out["status"] = status
+    out["failure"] = np.array(failure, dtype=str)
+    out["accepted_steps"] = counters[:, driver.COUNT_ACCEPTED]
+    out["rejected_steps"] = counters[:, driver.COUNT_REJECTED]
+    out["events"] = counters[:, driver.COUNT_EVENTS]
+    return out
+
+
+@contextlib.contextmanager
+def _executor(workers: int, dask: str | None, threads: int):
+    """Yield ``(executor or None, number of workers, description)``."""
+    if dask is None:
+        if workers == 0:
+            yield None, 1, f"inline, {threads} thread(s)"
+            return
+        kernel.warm()   # compile once here, so the workers only load the cache
+        ctx = multiprocessing.get_context("spawn")
+        with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_warm_worker,
+                                    initargs=(threads,)) as pool:
+            yield pool, workers, f"{workers} local worker process(es)"
+        return
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise ParameterError("running on Dask needs dask.distributed: pip install 'camdyn[cluster]'") from None
+    with contextlib.ExitStack() as stack:
+        if dask == "local":
+            kernel.warm()
+            cluster = stack.enter_context(LocalCluster(n_workers=max(workers, 1), threads_per_worker=1,
+                                                       processes=True, dashboard_address=None))
+            client = stack.enter_context(Client(cluster))
+        else:
+            try:
+                client = stack.enter_context(Client(dask, timeout="20s"))
+            except (OSError, TimeoutError) as exc:
+                raise ParameterError(f"cannot reach the Dask scheduler at {dask!r} ({exc})") from None
+        client.run(_warm_worker, threads)
+        n = len(client.scheduler_info()["workers"])
+        yield client.get_executor(), max(n, 1), f"Dask at {client.scheduler.address} ({n} workers)"
+
+
+def run_sweep(spec: SweepSpec, workers: int | None = None, dask: str | None = None, threads: int = 1,
+              progress: bool = True, restart: bool = False, keep_parts: bool = False,
+              echo=None) -> xr.Dataset:
+    """Run ``spec`` (resuming from its checkpoints) and return the result.
+
+    Parameters
+    ----------
+    spec : SweepSpec
+        From :func:`camdyn.sweeps.load_spec` or :func:`camdyn.sweeps.spec_from_dict`.
+    workers : int, optional
+        Local worker processes (default every core); 0 runs inline in this process.
+        With ``dask="local"``, the number of Dask workers.
+    dask : str, optional
+        ``"local"`` for a LocalCluster, or a scheduler address ``"tcp://HOST:PORT"``.
+    threads : int
+        Numba threads per worker for the kernel's ``prange`` (default 1: the
+        processes already use every core).
+    progress : bool
+        Show a progress bar with the time remaining.
+    restart : bool
+        Discard existing checkpoints of this output instead of resuming.
+    keep_parts : bool
+        Keep the per-chunk checkpoint files after the result is written.
+    echo : callable, optional
+        Receives one-line status messages (default: none).
+
+    Returns
+    -------
+    xarray.Dataset
+        The result file opened lazily (the data stays on disk until used).
+    """
+    workers = default_workers() if workers is None else int(workers)
+    if workers < 0 or threads < 1:
+        raise ParameterError("workers must be >= 0 and threads >= 1")
+    say = echo or (lambda _msg: None)
+    store = Checkpoint(spec, restart=restart)
+    done = store.done()
+    todo = [c for c in range(spec.chunks) if c not in done]
+    if done:
+        say(f"resuming: {len(done)} of {spec.chunks} chunks already on disk in {store.folder}")
+    if todo:
+        columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+                   TextColumn("points"), TimeElapsedColumn(), TimeRemainingColumn())
+        with Progress(*columns, disable=not progress) as bar, _executor(workers, dask, threads) as (pool, n, how):
+            say(f"{spec.points} points in {spec.chunks} chunks of {spec.chunk} on {how}")
+            task = bar.add_task(spec.name, total=spec.points,
+                                completed=sum(_chunk_size(spec, c) for c in done))
+            if pool is None:
+                for c in todo:
+                    store.save(c, compute_chunk(spec, c, threads))
+                    bar.advance(task, _chunk_size(spec, c))
+            else:
+                _drain(pool, n, spec, todo, threads, store, lambda c: bar.advance(task, _chunk_size(spec, c)))
+    path = store.assemble(keep_parts=keep_parts)
+    return xr.open_dataset(path, engine="h5netcdf")
+
+
+def _chunk_size(spec: SweepSpec, chunk: int) -> int:
+    return min(spec.chunk, spec.points - chunk * spec.chunk)
+
+
+def _drain(pool, n_workers, spec, todo, threads, store, advance) -> None:
+    queue = list(reversed(todo))
+    pending = {}
+    try:
+        while queue or pending:
+            while queue and len(pending) < 2 * n_workers:
+                c = queue.pop()
+                pending[pool.submit(compute_chunk, spec, c, threads)] = c
+            finished, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
+            for fut in finished:
+                c = pending.pop(fut)
+                try:
+                    result = fut.result()
+                except CamdynError:
+                    raise
+                except Exception as exc:  # a worker died or the code failed: keep what is done
+                    raise SimulationError(f"chunk {c} failed on its worker ({type(exc).__name__}: {exc}); "
+                                          f"finished chunks are kept, rerun to resume") from exc
+                store.save(c, result)
+                advance(c)
+    finally:
+        for fut in pending:
+            fut.cancel()

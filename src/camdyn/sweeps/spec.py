@@ -1,0 +1,322 @@
+"""The sweep specification: which system, which parameters vary over which values, how
+long each point runs, and which metrics it keeps.
+
+A spec is a TOML file (or the same tables as a dict)::
+
+    [system]
+    source = "sundar2014-impact"          # preset name or path to a system TOML
+    set = { "cam.runout" = "3.5 mm" }     # optional overrides, units as text
+
+    [[vary]]                              # one table per varied parameter
+    key = "motion.speed"
+    start = "5 Hz"                        # start/stop/num (inclusive) ...
+    stop = "30 Hz"
+    num = 400
+    # values = ["5 Hz", "10 Hz"]          # ... or an explicit list
+    # spacing = "log"                     # geometric spacing for start/stop/num
+    # dimension = "speed"                 # vary tables sharing a dimension are zipped
+
+    [run]
+    revolutions = 300                     # cam periods simulated per point
+    discard = 200                         # of which the first are the transient
+    samples_per_revolution = 64           # output samples per cam period
+    rtol = 3e-7                           # local error tolerances of the compiled core
+    atol = 1e-10
+    chunk = 8                             # points per task (and per checkpoint file)
+
+    [metrics]
+    names = ["residual", "impacts", "poincare", "max_force", "regime", "spectrum"]
+    harmonics = 10                        # cam harmonics of alpha_ddot kept by "spectrum"
+
+    [output]
+    path = "bifurcation.nc"
+
+Every value is checked, and every point's varied values are applied one parameter at a
+time to the base system, before any simulation starts (:func:`load_spec`), so a bad
+spec is refused up front with a message naming the table and key.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from camdyn import __version__
+from camdyn.config import SCHEMA, _convert, _unknown, load_system, system_from_toml, system_to_toml
+from camdyn.errors import CamdynError, ParameterError
+from camdyn.parameters import System
+
+__all__ = ["METRICS", "Vary", "SweepSpec", "load_spec", "spec_from_dict"]
+
+#: metric name -> what it adds to the result
+METRICS = {
+    "residual": "rms and peak-to-peak of the residual response alpha - alpha_rigid [rad]",
+    "impacts": "impacts (contact onsets) per revolution [1/rev]",
+    "poincare": "once-per-revolution samples of alpha [rad] and alpha_dot [rad/s]",
+    "max_force": "largest normal contact force [N]",
+    "regime": "contact kept / sliding reversal / periodic impacts / irregular impacts, and the "
+              "Poincare period",
+    "spectrum": "cam-harmonic amplitudes of alpha_ddot [rad/s^2] and the largest spectral peak",
+}
+
+_RUN_DEFAULTS = {"revolutions": 60.0, "discard": 20.0, "samples_per_revolution": 64, "rtol": 3e-7,
+                 "atol": 1e-10, "chunk": 8}
+_TABLES = {"system", "vary", "run", "metrics", "output"}
+
+
+@dataclass(frozen=True)
+class Vary:
+    """One varied parameter: dotted ``key``, its ``values`` in SI units along ``dimension``."""
+
+    key: str
+    dimension: str
+    values: tuple[float, ...]
+    unit: str
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A validated sweep.
+
+    Attributes
+    ----------
+    source, overrides : the base system (preset or TOML path, and dotted overrides).
+    system_toml : the base system written out as TOML (what every point starts from).
+    vary : the varied parameters.
+    dimensions : dimension names in order, with their lengths.
+    revolutions, discard : cam periods simulated and discarded per point [-].
+    samples_per_revolution : output samples per cam period [-].
+    rtol, atol : local error tolerances [-], [rad, rad/s].
+    chunk : points per task and per checkpoint file [-].
+    metrics : metric names (:data:`METRICS`); harmonics: cam harmonics kept [-].
+    output : result path (netCDF).
+    """
+
+    source: str
+    overrides: dict
+    system_toml: str
+    vary: tuple[Vary, ...]
+    dimensions: tuple[tuple[str, int], ...]
+    revolutions: int
+    discard: int
+    samples_per_revolution: int
+    rtol: float
+    atol: float
+    chunk: int
+    metrics: tuple[str, ...]
+    harmonics: int
+    output: Path
+    name: str = "sweep"
+    _base: System | None = field(default=None, compare=False, repr=False)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(n for _, n in self.dimensions)
+
+    @property
+    def points(self) -> int:
+        return int(np.prod(self.shape)) if self.shape else 1
+
+    @property
+    def chunks(self) -> int:
+        return math.ceil(self.points / self.chunk)
+
+    @property
+    def kept_revolutions(self) -> int:
+        return self.revolutions - self.discard
+
+    def base_system(self) -> System:
+        """The base system, rebuilt from :attr:`system_toml` (so that every process, local
+        or on a cluster without the spec's files, starts from the same numbers)."""
+        if self._base is None:
+            object.__setattr__(self, "_base", system_from_toml(self.system_toml))
+        return self._base
+
+    def point_values(self, index: int) -> dict:
+        """Dotted key -> SI value of the flat (C-order) point ``index``."""
+        where = np.unravel_index(index, self.shape) if self.shape else ()
+        dims = [d for d, _ in self.dimensions]
+        return {v.key: v.values[where[dims.index(v.dimension)]] for v in self.vary}
+
+    def digest(self) -> str:
+        """A hash of everything that determines the result (checkpoints must match it)."""
+        text = json.dumps({
+            "camdyn": __version__, "system": self.system_toml,
+            "vary": [(v.key, v.dimension, list(v.values)) for v in self.vary],
+            "run": [self.revolutions, self.discard, self.samples_per_revolution, self.rtol, self.atol,
+                    self.chunk],
+            "metrics": list(self.metrics), "harmonics": self.harmonics,
+        }, sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def __getstate__(self):            # the cached System travels as its TOML, not pickled
+        state = self.__dict__.copy()
+        state["_base"] = None
+        return state
+
+
+def _table(spec: dict, name: str, allowed: set) -> dict:
+    table = spec.get(name, {})
+    if not isinstance(table, dict):
+        raise ParameterError(f"sweep spec: [{name}] must be a table")
+    extra = set(table) - allowed
+    if extra:
+        raise ParameterError(f"sweep spec: unknown key(s) {sorted(extra)} in [{name}]; allowed: {sorted(allowed)}")
+    return table
+
+
+def _number(table: str, key: str, raw, integer: bool = False, minimum: float | None = None) -> float:
+    """A finite number from the spec: > 0, or >= ``minimum`` when one is given."""
+    if isinstance(raw, bool) or not isinstance(raw, (int, float)) or not math.isfinite(raw):
+        raise ParameterError(f"sweep spec: [{table}] {key} must be a finite number, got {raw!r}")
+    if integer and int(raw) != raw:
+        raise ParameterError(f"sweep spec: [{table}] {key} must be a whole number, got {raw!r}")
+    if (minimum is None and raw <= 0) or (minimum is not None and raw < minimum):
+        bound = "> 0" if minimum is None else f">= {minimum:g}"
+        raise ParameterError(f"sweep spec: [{table}] {key} must be {bound}, got {raw!r}")
+    return int(raw) if integer else float(raw)
+
+
+def _values(i: int, entry: dict) -> Vary:
+    where = f"[[vary]] #{i + 1}"
+    allowed = {"key", "values", "start", "stop", "num", "spacing", "dimension"}
+    extra = set(entry) - allowed
+    if extra:
+        raise ParameterError(f"sweep spec: unknown key(s) {sorted(extra)} in {where}; allowed: {sorted(allowed)}")
+    key = entry.get("key")
+    if not isinstance(key, str):
+        raise ParameterError(f"sweep spec: {where} needs key = \"dotted.parameter\"")
+    if key not in SCHEMA:
+        raise _unknown(key)
+    unit, _ = SCHEMA[key]
+    if unit in ("str", "bool", "int", "law"):
+        raise ParameterError(f"sweep spec: {key} cannot be swept (only quantities with units can)")
+
+    def si(raw):
+        return float(_convert(key, raw, {}))
+
+    if "values" in entry:
+        if {"start", "stop", "num", "spacing"} & set(entry):
+            raise ParameterError(f"sweep spec: {where} gives values and start/stop/num; give one")
+        raw = entry["values"]
+        if not isinstance(raw, list) or not raw:
+            raise ParameterError(f"sweep spec: {where} values must be a non-empty list")
+        values = np.array([si(r) for r in raw])
+    else:
+        missing = [k for k in ("start", "stop", "num") if k not in entry]
+        if missing:
+            raise ParameterError(f"sweep spec: {where} ({key}) needs values, or start, stop and num "
+                                 f"(missing {', '.join(missing)})")
+        num = int(_number("vary", "num", entry["num"], integer=True))
+        start, stop = si(entry["start"]), si(entry["stop"])
+        spacing = entry.get("spacing", "linear")
+        if spacing == "linear":
+            values = np.linspace(start, stop, num)
+        elif spacing == "log":
+            if start <= 0 or stop <= 0:
+                raise ParameterError(f"sweep spec: {where} log spacing needs positive start and stop")
+            values = np.geomspace(start, stop, num)
+        else:
+            raise ParameterError(f"sweep spec: {where} spacing must be 'linear' or 'log', got {spacing!r}")
+    if not np.all(np.isfinite(values)):
+        raise ParameterError(f"sweep spec: {where} ({key}) has a value that is not finite")
+    dimension = entry.get("dimension", key)
+    if not isinstance(dimension, str) or not dimension.strip():
+        raise ParameterError(f"sweep spec: {where} dimension must be a name")
+    return Vary(key=key, dimension=dimension.strip(), values=tuple(float(v) for v in values),
+                unit=unit if unit != "speed" else "Hz")
+
+
+def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep") -> SweepSpec:
+    """Validate a sweep given as nested dicts (the TOML's tables); see the module docstring."""
+    base_dir = Path(base_dir or ".")
+    extra = set(spec) - _TABLES
+    if extra:
+        raise ParameterError(f"sweep spec: unknown table(s) {sorted(extra)}; allowed: {sorted(_TABLES)}")
+    sys_t = _table(spec, "system", {"source", "set"})
+    if "source" not in sys_t:
+        raise ParameterError("sweep spec: [system] needs source = \"PRESET\" or \"path/to/system.toml\"")
+    source = str(sys_t["source"])
+    if source.endswith(".toml") and not Path(source).is_absolute():
+        source = str(base_dir / source)
+    overrides = sys_t.get("set", {})
+    if not isinstance(overrides, dict):
+        raise ParameterError("sweep spec: [system] set must be a table of KEY = \"VALUE\"")
+    toml_text = system_to_toml(load_system(source, overrides))
+    base = system_from_toml(toml_text)
+
+    entries = spec.get("vary", [])
+    if not isinstance(entries, list) or not entries:
+        raise ParameterError("sweep spec: give at least one [[vary]] table")
+    vary = tuple(_values(i, e if isinstance(e, dict) else {}) for i, e in enumerate(entries))
+    keys = [v.key for v in vary]
+    if len(set(keys)) != len(keys):
+        raise ParameterError(f"sweep spec: a parameter is varied twice ({keys})")
+    dims: dict[str, int] = {}
+    for v in vary:
+        n = dims.setdefault(v.dimension, len(v.values))
+        if n != len(v.values):
+            raise ParameterError(f"sweep spec: parameters zipped along {v.dimension!r} need equal numbers of "
+                                 f"values ({n} and {len(v.values)} for {v.key})")
+    # every value on its own must make a valid system (negative mass, unreachable cam, ...)
+    for v in vary:
+        for value in sorted(set(v.values)):
+            try:
+                base.with_values(**{v.key: value})
+            except CamdynError as exc:
+                raise ParameterError(f"sweep spec: {v.key} = {value:g} {v.unit}: {exc}") from None
+
+    run = {**_RUN_DEFAULTS, **_table(spec, "run", set(_RUN_DEFAULTS))}
+    revolutions = int(_number("run", "revolutions", run["revolutions"], integer=True))
+    discard = int(_number("run", "discard", run["discard"], integer=True, minimum=0))
+    if discard >= revolutions:
+        raise ParameterError(f"sweep spec: [run] discard ({discard}) must be less than revolutions ({revolutions})")
+    samples = int(_number("run", "samples_per_revolution", run["samples_per_revolution"], integer=True))
+    if samples < 8:
+        raise ParameterError("sweep spec: [run] samples_per_revolution must be at least 8")
+    rtol = _number("run", "rtol", run["rtol"])
+    atol = _number("run", "atol", run["atol"])
+    if rtol >= 1e-2:
+        raise ParameterError(f"sweep spec: [run] rtol = {rtol:g} is too loose to mean anything (use < 1e-2)")
+    chunk = int(_number("run", "chunk", run["chunk"], integer=True))
+
+    met = _table(spec, "metrics", {"names", "harmonics"})
+    names = met.get("names", list(METRICS))
+    if not isinstance(names, list) or not names:
+        raise ParameterError("sweep spec: [metrics] names must be a non-empty list")
+    unknown = [n for n in names if n not in METRICS]
+    if unknown:
+        raise ParameterError(f"sweep spec: unknown metric(s) {unknown}; choose from {list(METRICS)}")
+    harmonics = int(_number("metrics", "harmonics", met.get("harmonics", 10), integer=True))
+    if 2 * harmonics >= samples:
+        raise ParameterError(f"sweep spec: {harmonics} harmonics need samples_per_revolution > {2 * harmonics}")
+
+    out = _table(spec, "output", {"path"})
+    path = Path(str(out.get("path", f"{name}.nc")))
+    if not path.is_absolute():
+        path = base_dir / path
+    if path.suffix not in (".nc", ".h5"):
+        raise ParameterError(f"sweep spec: [output] path must end in .nc (netCDF4/HDF5), got {path.name!r}")
+    return SweepSpec(source=source, overrides=dict(overrides), system_toml=toml_text, vary=vary,
+                     dimensions=tuple(dims.items()), revolutions=revolutions, discard=discard,
+                     samples_per_revolution=samples, rtol=rtol, atol=atol, chunk=chunk,
+                     metrics=tuple(dict.fromkeys(names)), harmonics=harmonics, output=path, name=name,
+                     _base=base)
+
+
+def load_spec(path: str | Path) -> SweepSpec:
+    """Read and validate a sweep spec TOML file (see the module docstring)."""
+    path = Path(path)
+    if not path.is_file():
+        raise ParameterError(f"sweep spec {str(path)!r} does not exist")
+    try:
+        table = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"sweep spec {path.name}: not valid TOML ({exc})") from None
+    return spec_from_dict(table, base_dir=path.parent, name=path.stem)
