@@ -264,9 +264,11 @@ def design(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
 def register(app: typer.Typer) -> None:
     """Add these commands to the main app."""
     import camdyn.cli_impact  # noqa: F401  (registers the impact commands on identify_app)
+    from camdyn.cli_sweep import sweep
 
     app.add_typer(identify_app, name="identify")
     app.command("synthesize")(synthesize)
     app.command("synthesize-impulse")(synthesize_impulse)
     app.command("tribology")(tribology)
     app.command("design")(design)
+    app.command("sweep")(sweep)

@@ -399,11 +399,14 @@ class System:
                 f"the follower's contact surface offset ({h*1e3:g} mm)")
 
     def with_values(self, **dotted) -> "System":
-        """Return a copy with SI values changed by dotted key, e.g. ``with_values(**{"cam.runout": 3.5e-3})``."""
+        """Return a copy with SI values changed by dotted key, e.g. ``with_values(**{"cam.runout": 3.5e-3})``;
+        ``cam.radius`` sets both semi-axes."""
         groups: dict[str, dict] = {}
         top: dict = {}
         for key, value in dotted.items():
-            if "." in key:
+            if key == "cam.radius":                   # a circle: both semi-axes
+                groups.setdefault("cam", {}).update(semi_major=value, semi_minor=value)
+            elif "." in key:
                 group, name = key.split(".", 1)
                 groups.setdefault(group, {})[name] = value
             else:

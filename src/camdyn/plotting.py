@@ -206,3 +206,60 @@ def plot_restitution(estimate, path: str | Path) -> Path:
     ax.set_ylabel("coefficient of restitution xi [-]")
     ax.legend()
     return _save(fig, path)
+
+
+_REGIME_COLOURS = {-1: "#000000", 0: "#2ca02c", 1: "#ff7f0e", 2: "#1f77b4", 3: "#d62728"}
+
+
+def plot_sweep(ds: xr.Dataset, path: str | Path) -> Path:
+    """Figure of a sweep result (:func:`camdyn.sweeps.run_sweep`).
+
+    One swept dimension: the bifurcation diagram (Poincare alpha against the parameter),
+    impacts per revolution and the residual rms, as far as the metrics hold them. Two or
+    more: maps of the regime and of impacts per revolution over the first two swept
+    dimensions (later dimensions at their first value).
+    """
+    from matplotlib.colors import ListedColormap
+
+    dims = [d for d in ds["status"].dims]
+    first = ds[dims[0]]
+    if len(dims) == 1:
+        panels = [n for n in ("poincare_alpha", "impacts_per_revolution", "residual_rms", "max_normal_force")
+                  if n in ds]
+        fig, axes = plt.subplots(len(panels), 1, figsize=(7, 2.2 * len(panels) + 0.6), sharex=True, squeeze=False)
+        for ax, name in zip(axes[:, 0], panels):
+            da = ds[name]
+            if name == "poincare_alpha":
+                x = np.repeat(first.values, da.sizes["revolution"])
+                ax.plot(x, da.values.ravel(), ",", color="k", alpha=0.6)
+                ax.set_title("bifurcation diagram: follower angle once per cam period")
+            else:
+                ax.plot(first.values, da.values, ".-", lw=0.8, ms=3)
+            ax.set_ylabel(_label(da), fontsize=8)
+        axes[-1, 0].set_xlabel(_label(first))
+        return _save(fig, path)
+    sel = {d: 0 for d in dims[2:]}
+    second = ds[dims[1]]
+    names = [n for n in ("regime", "impacts_per_revolution") if n in ds]
+    if not names:
+        names = ["status"]
+    fig, axes = plt.subplots(1, len(names), figsize=(6 * len(names), 4.6), squeeze=False)
+    for ax, name in zip(axes[0], names):
+        da = ds[name].isel(sel)
+        values = da.transpose(dims[1], dims[0]).values.astype(float)
+        if name == "regime":
+            codes = sorted(_REGIME_COLOURS)
+            ax.pcolormesh(first.values, second.values, values, shading="nearest", vmin=-1.5, vmax=3.5,
+                          cmap=ListedColormap([_REGIME_COLOURS[c] for c in codes]))
+            for c in codes:
+                label = {-1: "failed", 0: "contact kept", 1: "vr reversal", 2: "periodic impacts",
+                         3: "irregular impacts"}[c]
+                ax.plot([], [], "s", color=_REGIME_COLOURS[c], label=label, markersize=9)
+            ax.legend(fontsize=7, loc="upper right", framealpha=0.9)
+        else:
+            mesh = ax.pcolormesh(first.values, second.values, values, shading="nearest", cmap="viridis")
+            fig.colorbar(mesh, ax=ax, label=_label(ds[name]))
+        ax.set_xlabel(_label(first))
+        ax.set_ylabel(_label(second))
+        ax.set_title(ds[name].attrs.get("long_name", name), fontsize=9)
+    return _save(fig, path)

@@ -264,11 +264,13 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
         if n != len(v.values):
             raise ParameterError(f"sweep spec: parameters zipped along {v.dimension!r} need equal numbers of "
                                  f"values ({n} and {len(v.values)} for {v.key})")
-    # every value on its own must make a valid system (negative mass, unreachable cam, ...)
+    # every value on its own must make a valid system (negative mass, unreachable cam, ...);
+    # only combinations of values may fail (those points are recorded as failed)
+    from camdyn.simulation import prepare
     for v in vary:
         for value in sorted(set(v.values)):
             try:
-                base.with_values(**{v.key: value})
+                prepare(base.with_values(**{v.key: value}))
             except CamdynError as exc:
                 raise ParameterError(f"sweep spec: {v.key} = {value:g} {v.unit}: {exc}") from None
 
