@@ -4,7 +4,8 @@ checkpoint per finished chunk.
 
 - Local (default): a :class:`~concurrent.futures.ProcessPoolExecutor` of ``workers``
   processes (default: every core), started with ``spawn`` (numba's threads do not
-  survive ``fork``); each loads the compiled kernel from the on-disk cache once.
+  survive ``fork``); each loads the compiled kernel from numba's on-disk cache once (the
+  first run on a machine compiles it, about 10 s; numba writes its cache atomically).
 - Dask: ``dask="local"`` starts a ``LocalCluster`` of ``workers`` single-threaded worker
   processes; ``dask="tcp://HOST:PORT"`` connects to a running scheduler (for example one
   started by dask-jobqueue on an HPC system, see docs/sweeps.md). The client's executor
@@ -114,7 +115,6 @@ def _executor(workers: int, dask: str | None, threads: int):
         if workers == 0:
             yield None, 1, f"inline, {threads} thread(s)"
             return
-        kernel.warm()   # compile once here, so the workers only load the cache
         ctx = multiprocessing.get_context("spawn")
         with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_warm_worker,
                                     initargs=(threads,)) as pool:
@@ -126,7 +126,6 @@ def _executor(workers: int, dask: str | None, threads: int):
         raise ParameterError("running on Dask needs dask.distributed: pip install 'camdyn[cluster]'") from None
     with contextlib.ExitStack() as stack:
         if dask == "local":
-            kernel.warm()
             cluster = stack.enter_context(LocalCluster(n_workers=max(workers, 1), threads_per_worker=1,
                                                        processes=True, dashboard_address=None))
             client = stack.enter_context(Client(cluster))

@@ -1,0 +1,154 @@
+"""Benchmark of parameter sweeps (issue 5): throughput against plain SciPy, parallel
+scaling from 1 to 2 workers (local pool and Dask LocalCluster), and peak memory of a
+100 000-point sweep.
+
+Throughput: the bifurcation diagram of the chapter 3 rig (e/rc = 0.2), 400 speeds from 5 to
+30 Hz, 300 revolutions each (the first 200 discarded), 64 samples per revolution, run by
+``camdyn sweep``'s engine on 2 local workers, wall time including the workers' start.
+SciPy: ``camdyn.reference`` (solve_ivp DOP853 with contact events, the accuracy-matched
+pair of benchmarks/bench_simulate.py: SciPy rtol 1e-6 against camdyn rtol 3e-7) run point
+by point on a subset of the speeds (every 40th) for a subset of the revolutions; its time
+per revolution at each speed is scaled to the whole sweep.
+
+Usage:  python benchmarks/bench_sweep.py [--quick] [--skip-memory]   (writes benchmarks/sweep.json)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import camdyn
+from camdyn.reference import reference_simulate
+from camdyn.simulation import prepare
+from camdyn.sweeps import run_sweep, spec_from_dict
+
+HERE = Path(__file__).parent
+
+
+def bifurcation(path: Path, num=400, revolutions=300, discard=200) -> dict:
+    return {"system": {"source": "sundar2014-impact", "set": {"cam.runout": "3.5 mm"}},
+            "vary": [{"key": "motion.speed", "start": "5 Hz", "stop": "30 Hz", "num": num}],
+            "run": {"revolutions": revolutions, "discard": discard, "samples_per_revolution": 64, "rtol": 3e-7,
+                    "atol": 1e-10, "chunk": 5},
+            "output": {"path": str(path)}}
+
+
+def timed_sweep(table: dict, **kwargs) -> float:
+    spec = spec_from_dict(table)
+    start = time.perf_counter()
+    run_sweep(spec, progress=False, restart=True, **kwargs).close()
+    return time.perf_counter() - start
+
+
+def scipy_seconds_per_revolution(speeds, revolutions: int) -> list[float]:
+    base = camdyn.load_system("sundar2014-impact", {"cam.runout": "3.5 mm"})
+    out = []
+    for hz in speeds:
+        system = base.with_values(**{"motion.speed": float(hz)})
+        prep = prepare(system)
+        t_end = revolutions / hz
+        t_out = np.arange(revolutions * 64) / (64 * hz)
+        start = time.perf_counter()
+        reference_simulate(system, prep.theta0, prep.y0, t_end, t_out, prep.viscous_c, method="DOP853", rtol=1e-6,
+                           atol=1e-10)
+        out.append((time.perf_counter() - start) / revolutions)
+        print(f"  SciPy {hz:6.2f} Hz: {1e3 * out[-1]:7.2f} ms/rev", flush=True)
+    return out
+
+
+MEMORY_SCRIPT = """
+import resource, sys, time
+from camdyn.sweeps import run_sweep, spec_from_dict
+if __name__ == "__main__":
+    table = {{"system": {{"source": "sundar2014-impact"}},
+             "vary": [{{"key": "cam.runout", "start": "1 mm", "stop": "4 mm", "num": {n1}}},
+                      {{"key": "motion.speed", "start": "5 Hz", "stop": "25 Hz", "num": {n2}}}],
+             "run": {{"revolutions": 8, "discard": 4, "samples_per_revolution": 16, "chunk": 200}},
+             "metrics": {{"harmonics": 4}},
+             "output": {{"path": r"{path}"}}}}
+    start = time.perf_counter()
+    ds = run_sweep(spec_from_dict(table), workers=2, progress=False, restart=True)
+    points = int(ds.status.size)
+    failed = int((ds.status != 0).sum())
+    ds.close()
+    main = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    child = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    print(points, failed, main, child, time.perf_counter() - start)
+"""
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--quick", action="store_true", help="smaller sweeps (a smoke test of this script)")
+    parser.add_argument("--skip-memory", action="store_true")
+    args = parser.parse_args()
+    num, revs = (40, 60) if args.quick else (400, 300)
+    result = {"machine": platform.machine(), "python": platform.python_version(), "camdyn": camdyn.__version__}
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        # compile / load the kernel once, outside every timing
+        timed_sweep(bifurcation(tmp / "warm.nc", num=2, revolutions=4, discard=2), workers=0)
+
+        wall = timed_sweep(bifurcation(tmp / "bif.nc", num, revs, revs * 2 // 3), workers=2)
+        speeds = np.linspace(5, 30, num)[::40]
+        sci_revs = 10 if args.quick else 30
+        per_rev = scipy_seconds_per_revolution(speeds, sci_revs)
+        scipy_total = float(np.mean(per_rev)) * revs * num
+        result["throughput"] = {
+            "sweep": f"ch3 rig e/rc = 0.2, {num} speeds 5-30 Hz, {revs} revolutions each",
+            "camdyn_workers": 2, "camdyn_wall_s": wall,
+            "scipy_speeds_timed": [float(s) for s in speeds], "scipy_revolutions_timed": sci_revs,
+            "scipy_ms_per_rev": [1e3 * x for x in per_rev],
+            "scipy_estimated_s": scipy_total, "speedup": scipy_total / wall}
+        print(f"throughput: camdyn {wall:.1f} s on 2 workers; SciPy (scaled) {scipy_total:.0f} s; "
+              f"x{scipy_total / wall:.0f}", flush=True)
+
+        scale_num = 40 if args.quick else 160
+        scaling = {}
+        for label, kwargs in (("local", {}), ("dask", {"dask": "local"})):
+            times, starts = {}, {}
+            for n in (1, 2):
+                # the start of the workers alone: one tiny point per worker
+                starts[n] = timed_sweep(bifurcation(tmp / f"{label}{n}s.nc", n, 2, 1), workers=n, **kwargs)
+                times[n] = timed_sweep(bifurcation(tmp / f"{label}{n}.nc", scale_num, revs, revs * 2 // 3),
+                                       workers=n, **kwargs)
+            wall_eff = times[1] / (2 * times[2])
+            work_eff = (times[1] - starts[1]) / (2 * (times[2] - starts[2]))
+            scaling[label] = {"one_worker_s": times[1], "two_workers_s": times[2], "efficiency_wall": wall_eff,
+                              "start_one_worker_s": starts[1], "start_two_workers_s": starts[2],
+                              "efficiency_without_start": work_eff}
+            print(f"scaling {label}: 1 worker {times[1]:.1f} s, 2 workers {times[2]:.1f} s (start {starts[1]:.1f}, "
+                  f"{starts[2]:.1f} s); efficiency {wall_eff:.0%} wall, {work_eff:.0%} without the start", flush=True)
+        result["scaling"] = {"sweep": f"{scale_num} speeds x {revs} revolutions (wall time incl. worker start)",
+                             **scaling}
+
+        if not args.skip_memory:
+            n1, n2 = (20, 50) if args.quick else (250, 400)
+            script = MEMORY_SCRIPT.format(n1=n1, n2=n2, path=tmp / "memory.nc")
+            (tmp / "memory_run.py").write_text(script)
+            line = subprocess.run([sys.executable, str(tmp / "memory_run.py")], capture_output=True, text=True,
+                                  check=True).stdout.split()
+            points, failed, main_mb, child_mb, seconds = int(line[0]), int(line[1]), *map(float, line[2:])
+            result["memory"] = {"points": points, "failed": failed, "main_peak_MB": main_mb,
+                                "largest_worker_peak_MB": child_mb,
+                                "total_peak_bound_MB": main_mb + 2 * child_mb, "seconds": seconds}
+            print(f"memory: {points} points ({failed} failed) in {seconds:.0f} s; main {main_mb:.0f} MB, "
+                  f"worker {child_mb:.0f} MB", flush=True)
+    out = HERE / ("sweep_quick.json" if args.quick else "sweep.json")
+    if args.skip_memory and out.exists() and "memory" in json.loads(out.read_text()):
+        result["memory"] = json.loads(out.read_text())["memory"]     # keep the last measurement
+    out.write_text(json.dumps(result, indent=2))
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
