@@ -1,14 +1,16 @@
-"""``camdyn sweep SPEC.toml``: a parameter sweep, locally or on a Dask cluster."""
+"""``camdyn sweep SPEC.toml`` (a parameter sweep, locally or on a Dask cluster), and the
+bifurcation diagram and Lyapunov exponent built on it: ``camdyn bifurcation``, ``camdyn lyapunov``."""
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import List, Optional
 
 import typer
 
-from camdyn.cli_tools import console
+from camdyn.cli_tools import SetOption, console
 from camdyn.errors import ParameterError
+from camdyn.sweeps.metrics import REGIMES
 
 
 def sweep(spec_path: Path = typer.Argument(..., metavar="SPEC.toml", help="Sweep specification (docs/sweeps.md)."),
@@ -47,3 +49,68 @@ def sweep(spec_path: Path = typer.Argument(..., metavar="SPEC.toml", help="Sweep
         plot_sweep(ds, figure)
         console.print(f"wrote {figure}", highlight=False, soft_wrap=True)
     ds.close()
+
+
+def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
+                set_: Optional[List[str]] = SetOption,
+                speeds: str = typer.Option("5Hz:30Hz:200", help="START:STOP:COUNT cam speeds (inclusive)."),
+                revolutions: int = typer.Option(300, help="Cam periods simulated per speed."),
+                discard: int = typer.Option(200, help="Of which the first are dropped (transient)."),
+                out: Path = typer.Option(Path("bifurcation.nc"), help="Result file (.nc)."),
+                plot: Optional[Path] = typer.Option(None, help="Figure (default: the result's name with .png)."),
+                workers: Optional[int] = typer.Option(None, help="Worker processes (default every core)."),
+                dask: Optional[str] = typer.Option(None, help="'local' or a scheduler address tcp://HOST:PORT."),
+                restart: bool = typer.Option(False, help="Discard checkpoints instead of resuming."),
+                quiet: bool = typer.Option(False, help="No progress bar.")):
+    """Bifurcation diagram over cam speed: Poincare samples once per revolution, impacts per
+    revolution, period and regime (a sweep; see 'camdyn sweep' for the general form)."""
+    from camdyn.config import parse_assignments
+    from camdyn.plotting import plot_sweep
+    from camdyn.sweeps import run_sweep, spec_from_dict
+
+    parts = speeds.split(":")
+    if len(parts) != 3:
+        raise ParameterError(f"--speeds expects START:STOP:COUNT, e.g. 5Hz:30Hz:200, got {speeds!r}")
+    try:
+        count = int(parts[2])
+    except ValueError:
+        raise ParameterError(f"--speeds: COUNT must be a whole number, got {parts[2]!r}") from None
+    table = {"system": {"source": source, "set": parse_assignments(set_)},
+             "vary": [{"key": "motion.speed", "start": parts[0], "stop": parts[1], "num": count}],
+             "run": {"revolutions": revolutions, "discard": discard},
+             "metrics": {"names": ["poincare", "impacts", "regime", "residual", "max_force"]},
+             "output": {"path": str(out)}}
+    spec = spec_from_dict(table, name=out.stem)
+    ds = run_sweep(spec, workers=workers, dask=dask, progress=not quiet, restart=restart,
+                   echo=lambda msg: console.print(msg, highlight=False, soft_wrap=True))
+    figure = plot_sweep(ds, plot or out.with_suffix(".png"))
+    counts = {name: int((ds.regime == code).sum()) for code, name in REGIMES.items()}
+    console.print(f"wrote {out} and {figure}; regimes: " + ", ".join(f"{k} {v}" for k, v in counts.items() if v),
+                  highlight=False, soft_wrap=True)
+    ds.close()
+
+
+def lyapunov(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
+             set_: Optional[List[str]] = SetOption,
+             speed: str = typer.Option(..., help="Cam speed, e.g. 18Hz or 1080rpm."),
+             revolutions: int = typer.Option(400, help="Cam periods averaged."),
+             transient: int = typer.Option(200, help="Cam periods dropped first."),
+             json_: bool = typer.Option(False, "--json", help="Print JSON.")):
+    """Largest Lyapunov exponent of the steady motion at one speed (two nearby trajectories
+    through every impact, renormalised once per revolution)."""
+    from camdyn.analysis.chaos import lyapunov_exponent
+    from camdyn.cli_tools import _print_json, _system
+    from camdyn.units import parse_speed
+
+    result = lyapunov_exponent(_system(source, set_), speed=parse_speed(speed), revolutions=revolutions,
+                               transient=transient)
+    half = result.running[revolutions // 2 - 1] if revolutions >= 2 else float("nan")
+    if json_:
+        _print_json({"speed_hz": result.speed, "exponent_per_s": result.exponent,
+                     "per_revolution": result.per_revolution, "exponent_half_record_per_s": float(half),
+                     "revolutions": revolutions, "transient": transient})
+        return
+    verdict = "chaotic" if result.exponent > 0 else "not chaotic (attracting)"
+    console.print(f"largest Lyapunov exponent at {result.speed:g} Hz: {result.exponent:.4g} 1/s "
+                  f"({result.per_revolution:.4g} per revolution; {float(half):.4g} 1/s over the first half): "
+                  f"{verdict}", highlight=False, soft_wrap=True)

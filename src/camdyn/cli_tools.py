@@ -264,7 +264,7 @@ def design(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
 def register(app: typer.Typer) -> None:
     """Add these commands to the main app."""
     import camdyn.cli_impact  # noqa: F401  (registers the impact commands on identify_app)
-    from camdyn.cli_sweep import sweep
+    from camdyn.cli_sweep import bifurcation, lyapunov, sweep
 
     app.add_typer(identify_app, name="identify")
     app.command("synthesize")(synthesize)
@@ -272,3 +272,5 @@ def register(app: typer.Typer) -> None:
     app.command("tribology")(tribology)
     app.command("design")(design)
     app.command("sweep")(sweep)
+    app.command("bifurcation")(bifurcation)
+    app.command("lyapunov")(lyapunov)
