@@ -34,6 +34,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from camdyn.core import driver
 from camdyn.errors import CamdynError, ParameterError, SimulationError
+from camdyn.model.layout import SIZE
 from camdyn.simulation import prepare
 from camdyn.sweeps import kernel
 from camdyn.sweeps import metrics as M
@@ -66,7 +67,7 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int = 1) -> dict:
     stop = min(start + spec.chunk, spec.points)
     n = stop - start
     base = spec.base_system()
-    params = None
+    params = None                           # sized from the first prepared point
     starts = np.zeros((n, 3))
     periods = np.full(n, np.nan)
     status = np.zeros(n, dtype=np.int8)
@@ -86,8 +87,7 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int = 1) -> dict:
         params[i] = prep.p
         starts[i] = prep.y0
         periods[i] = period
-    if params is None:
-        from camdyn.model.layout import SIZE
+    if params is None:                      # every point refused
         params = np.zeros((n, SIZE))
     window, onsets, impact_force, counters = kernel.simulate_points(
         params, starts, periods, spec.revolutions, spec.discard, spec.samples_per_revolution, spec.rtol,
