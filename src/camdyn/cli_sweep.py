@@ -8,7 +8,7 @@ from typing import List, Optional
 
 import typer
 
-from camdyn.cli_tools import SetOption, console
+from camdyn.cli_tools import SetOption, _grid, console
 from camdyn.errors import ParameterError
 from camdyn.sweeps.metrics import REGIMES
 
@@ -53,7 +53,8 @@ def sweep(spec_path: Path = typer.Argument(..., metavar="SPEC.toml", help="Sweep
 
 def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                 set_: Optional[List[str]] = SetOption,
-                speeds: str = typer.Option("5Hz:30Hz:200", help="START:STOP:COUNT cam speeds (inclusive)."),
+                speeds: str = typer.Option("5Hz:30Hz:200",
+                                           help="START:STOP:COUNT cam speeds (inclusive), or a comma list."),
                 revolutions: int = typer.Option(300, help="Cam periods simulated per speed."),
                 discard: int = typer.Option(200, help="Of which the first are dropped (transient)."),
                 out: Path = typer.Option(Path("bifurcation.nc"), help="Result file (.nc)."),
@@ -68,15 +69,9 @@ def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     from camdyn.plotting import plot_sweep
     from camdyn.sweeps import run_sweep, spec_from_dict
 
-    parts = speeds.split(":")
-    if len(parts) != 3:
-        raise ParameterError(f"--speeds expects START:STOP:COUNT, e.g. 5Hz:30Hz:200, got {speeds!r}")
-    try:
-        count = int(parts[2])
-    except ValueError:
-        raise ParameterError(f"--speeds: COUNT must be a whole number, got {parts[2]!r}") from None
+    grid = _grid(speeds, "--speeds", "Hz")
     table = {"system": {"source": source, "set": parse_assignments(set_)},
-             "vary": [{"key": "motion.speed", "start": parts[0], "stop": parts[1], "num": count}],
+             "vary": [{"key": "motion.speed", "values": [float(v) for v in grid]}],
              "run": {"revolutions": revolutions, "discard": discard},
              "metrics": {"names": ["poincare", "impacts", "regime", "residual", "max_force"]},
              "output": {"path": str(out)}}
