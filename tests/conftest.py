@@ -18,3 +18,8 @@ def impact_rig():
 @pytest.fixture(scope="session")
 def standin_rig():
     return camdyn.load_system("alzate2007-standin")
+
+
+@pytest.fixture(scope="session")
+def impacting_standin():
+    return camdyn.load_system("alzate2007-standin-impacting")

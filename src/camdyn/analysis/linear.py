@@ -1,0 +1,204 @@
+"""The linearized cam-follower model (thesis 2.8, eqs 2.36-2.38).
+
+The thesis linearizes the equation of motion about the static equilibrium and keeps the
+cam runout as a forcing term: ``I_P x'' + C_l x' + K_l x = F_l(t)`` with ``x = alpha -
+alpha*``. Its printed coefficients are garbled, so camdyn derives them from the same
+moment function the simulator integrates, by a first-order Taylor expansion about the
+**concentric cam** (runout ``e = 0``, where the static equilibrium does not depend on
+the cam angle):
+
+- ``K_l = -dM/dalpha`` and ``C_l = -dM/dalpha_dot`` at ``(alpha*, 0)``;
+- ``F_l(t) = e * dM/de`` at ``(alpha*, 0, Theta(t))``,
+
+with ``M`` the moment about the pivot [N m]; all derivatives are central differences.
+For a line contact without friction this gives ``K_l = k chi*^2 + k delta* (PEx sin a* +
+PEy cos a*) + ks dx (dx sec^2 a* + wb/2 sec a* tan a*)`` and ``F_l = e k (chi* sin(a* +
+Theta) - delta* cos(a* + Theta))`` (tested). Choices, written down:
+
+- the damping laws D and E switch between two coefficients on the sign of the
+  penetration rate; the linear model uses their mean, the equivalent linear damper of
+  a bilinear one under harmonic motion (half a cycle each);
+- Coulomb friction keeps the sign the turning cam gives it (the model is only valid
+  while ``vr`` does not reverse); tanh friction is linearized like everything else;
+- restitution-parameterised laws use the reference approach velocity, as the static
+  equilibrium does;
+- only circular cams (an elliptic cam's profile is not a small perturbation).
+
+Under constant cam speed the forcing is a single cam harmonic, so the linear model has
+no super-harmonics at all (thesis fig 2.16); :meth:`LinearModel.steady_state` gives its
+periodic response in closed form and :meth:`LinearModel.simulate` the full response
+from any initial state (``scipy.signal.lsim``), for any cam motion.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+from scipy import signal
+
+from camdyn.errors import ParameterError
+from camdyn.model import layout as L
+from camdyn.model.dynamics import evaluate
+from camdyn.parameters import System
+
+__all__ = ["LinearModel", "linearize"]
+
+
+def _moment(p, t, alpha, alpha_dot, slip, compressing) -> float:
+    mode = np.array([1.0, slip, compressing, p[L.V_REFERENCE], 0.0])
+    return evaluate(t, alpha, alpha_dot, mode, p)[0] * p[L.INERTIA]
+
+
+@dataclass(frozen=True)
+class LinearModel:
+    """``I x'' + C x' + K x = F(t)``, ``x = alpha - alpha*`` [rad].
+
+    Attributes
+    ----------
+    inertia : float
+        ``I_P`` [kg m^2].
+    stiffness : float
+        ``K_l`` [N m/rad].
+    damping : float
+        ``C_l`` [N m s/rad].
+    equilibrium_angle : float
+        ``alpha*`` of the concentric cam [rad].
+    runout : float
+        ``e`` [m], the amplitude the forcing is scaled by.
+    speed : float
+        Cam speed [Hz] (constant motion; 0 for an oscillating cam).
+    """
+
+    inertia: float
+    stiffness: float
+    damping: float
+    equilibrium_angle: float
+    runout: float
+    speed: float
+    _p: np.ndarray
+    _slip: float
+    _compressing: tuple
+
+    @property
+    def natural_frequency(self) -> float:
+        """Undamped natural frequency ``sqrt(K/I) / 2 pi`` [Hz]."""
+        return math.sqrt(self.stiffness / self.inertia) / (2.0 * math.pi)
+
+    @property
+    def damping_ratio(self) -> float:
+        """``C / (2 sqrt(K I))`` [-]."""
+        return self.damping / (2.0 * math.sqrt(self.stiffness * self.inertia))
+
+    def forcing(self, time) -> np.ndarray:
+        """``F_l(t) = e dM/de`` [N m] at the sample times [s]."""
+        t = np.atleast_1d(np.asarray(time, dtype=float))
+        if self.runout == 0.0:
+            return np.zeros_like(t)
+        eps = 1e-7 * max(self._p[L.SEMI_A], 1e-3)
+        plus, minus = self._p.copy(), self._p.copy()
+        plus[L.RUNOUT], minus[L.RUNOUT] = eps, -eps
+        a = self.equilibrium_angle
+        out = np.empty_like(t)
+        for i, ti in enumerate(t):
+            d = 0.0
+            for c in self._compressing:
+                d += _moment(plus, ti, a, 0.0, self._slip, c) - _moment(minus, ti, a, 0.0, self._slip, c)
+            out[i] = self.runout * d / (2.0 * eps * len(self._compressing))
+        return out
+
+    def forcing_amplitude(self) -> complex:
+        """Complex amplitude ``F^`` [N m] with ``F_l(t) = Re(F^ exp(i Omega t))`` (constant speed)."""
+        if self.speed <= 0.0:
+            raise ParameterError("the forcing is a single harmonic only under constant cam speed")
+        t = np.arange(64) / (64 * self.speed)
+        f = self.forcing(t)
+        return 2.0 * np.mean(f * np.exp(-2j * np.pi * self.speed * t))
+
+    def receptance(self, frequency) -> np.ndarray:
+        """``x^/F^ = 1/(K - I w^2 + i C w)`` [rad/(N m)] at ``frequency`` [Hz]."""
+        w = 2.0 * np.pi * np.asarray(frequency, dtype=float)
+        return 1.0 / (self.stiffness - self.inertia * w ** 2 + 1j * self.damping * w)
+
+    def steady_state(self, time) -> xr.Dataset:
+        """The periodic response under constant cam speed, in closed form."""
+        t = np.asarray(time, dtype=float)
+        x_hat = self.forcing_amplitude() * self.receptance(self.speed)
+        w = 2.0 * np.pi * self.speed
+        z = np.exp(1j * w * t)
+        x = np.real(x_hat * z)
+        return self._dataset(t, x, np.real(1j * w * x_hat * z), np.real(-w ** 2 * x_hat * z),
+                             "steady state")
+
+    def simulate(self, time, x0: float = 0.0, v0: float = 0.0) -> xr.Dataset:
+        """Response from ``x(0) = x0`` [rad], ``x'(0) = v0`` [rad/s] at ``time`` [s] (uniform, from 0)."""
+        t = np.asarray(time, dtype=float)
+        k, c, i = self.stiffness, self.damping, self.inertia
+        system = signal.StateSpace([[0.0, 1.0], [-k / i, -c / i]], [[0.0], [1.0 / i]],
+                                   [[1.0, 0.0], [0.0, 1.0]], [[0.0], [0.0]])
+        f = self.forcing(t)
+        _, out, _ = signal.lsim(system, f, t, X0=[x0, v0])
+        x, v = out[:, 0], out[:, 1]
+        return self._dataset(t, x, v, (f - c * v - k * x) / i, "transient and steady state")
+
+    def _dataset(self, t, x, v, a, kind) -> xr.Dataset:
+        ds = xr.Dataset(
+            {"alpha": ("time", self.equilibrium_angle + x, {"units": "rad", "long_name": "follower angle (linear model)"}),
+             "alpha_dot": ("time", v, {"units": "rad/s", "long_name": "follower angular velocity (linear model)"}),
+             "alpha_ddot": ("time", a, {"units": "rad/s^2",
+                                        "long_name": "follower angular acceleration (linear model)"})},
+            coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
+        ds.attrs.update(model="linearized (thesis eqs 2.36-2.38)", response=kind, speed_hz=self.speed,
+                        natural_frequency_Hz=self.natural_frequency, damping_ratio=self.damping_ratio,
+                        stiffness_N_m_per_rad=self.stiffness, damping_N_m_s_per_rad=self.damping)
+        return ds
+
+
+def linearize(system: System, speed=None) -> LinearModel:
+    """The linearized model of ``system`` about its concentric-cam equilibrium.
+
+    Parameters
+    ----------
+    system : System
+        A circular cam in permanent contact at rest.
+    speed : float or str, optional
+        Cam speed [Hz] or a quantity (``"300 rpm"``); default the system's own.
+
+    Raises
+    ------
+    ParameterError
+        For an elliptic cam, or a follower that does not rest on the concentric cam.
+    """
+    from camdyn.simulation import _with_speed, prepare
+    system = _with_speed(system, speed)
+    if system.cam.semi_major != system.cam.semi_minor:
+        raise ParameterError("the linearized model needs a circular cam (cam.semi_major = cam.semi_minor)")
+    concentric = prepare(system.with_values(**{"cam.runout": 0.0}))
+    if not concentric.equilibrium.in_contact:
+        raise ParameterError("the follower does not rest on the cam, so there is no contact to linearize")
+    p = concentric.p.copy()
+    own = prepare(system)
+    p[L.VISCOUS_C] = own.viscous_c  # the simulated system's own law-A coefficient
+    p[L.THETA0] = own.theta0        # and its own cam phase (the 0-state moves with e)
+    a = concentric.equilibrium.angle
+    from camdyn.model.equilibrium import _static_parameters
+    slip = 1.0 if _static_parameters(system, concentric.theta0)[L.MU] >= 0 else -1.0
+    law = system.contact.damping
+    compressing = (1.0, 0.0) if law in ("stiffness-proportional-viscous", "zhang-whiten-viscous") else (1.0,)
+    ha = 1e-7
+    hv = 1e-6
+    k = c = 0.0
+    for comp in compressing:
+        k -= (_moment(p, 0.0, a + ha, 0.0, slip, comp) - _moment(p, 0.0, a - ha, 0.0, slip, comp)) / (2 * ha)
+        c -= (_moment(p, 0.0, a, hv, slip, comp) - _moment(p, 0.0, a, -hv, slip, comp)) / (2 * hv)
+    k /= len(compressing)
+    c /= len(compressing)
+    if not k > 0:
+        raise ParameterError(f"the linearized stiffness is {k:.3g} N m/rad: the equilibrium is not stable")
+    motion = system.motion
+    hz = float(motion.speed) if motion.kind == "constant" else 0.0
+    p[L.RUNOUT] = 0.0
+    return LinearModel(inertia=system.follower.inertia, stiffness=k, damping=c, equilibrium_angle=a,
+                       runout=system.cam.runout, speed=hz, _p=p, _slip=slip, _compressing=compressing)
