@@ -274,3 +274,5 @@ def register(app: typer.Typer) -> None:
     app.command("sweep")(sweep)
     app.command("bifurcation")(bifurcation)
     app.command("lyapunov")(lyapunov)
+    from camdyn.cli_analysis import register as register_analysis
+    register_analysis(app)

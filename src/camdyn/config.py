@@ -14,6 +14,7 @@ unit it is stored in (SI). Presets are such files shipped in ``camdyn/presets``.
 from __future__ import annotations
 
 import difflib
+import json
 import math
 import tomllib
 from importlib import resources
@@ -280,8 +281,7 @@ def load_system(source: str | Path, overrides: dict | None = None) -> System:
 def system_to_toml(system: System) -> str:
     """Write a system as TOML text with units, readable by :func:`load_system`."""
     s = system
-    lines = ["[preset]", f"name = {s.name!r}".replace("'", '"'),
-             f"citation = {s.citation!r}".replace("'", '"'), ""]
+    lines = ["[preset]", f"name = {json.dumps(s.name)}", f"citation = {json.dumps(s.citation)}", ""]
 
     def q(value, unit):
         return f'"{value!r} {unit}"'

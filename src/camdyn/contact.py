@@ -6,7 +6,7 @@ Hertz (eqs 2.13-2.14, 3.11-3.13), with ``1/E* = (1-nu_c^2)/Y_c + (1-nu_b^2)/Y_b`
 - point contact of crossed cylinders: ``F_k = (4/3) E* sqrt(rho_e) delta^1.5`` with
   ``rho_e = (1/rho_c + 1/rd)^-1`` (eq 4.18).
 
-Damping laws (thesis 2.3.4, 3.2): A viscous, B ``beta k(delta)``, C Zhang-Whiten
+Damping laws (thesis 2.3.4, 3.2): A viscous, B ``beta F_k(delta)``, C Zhang-Whiten
 ``beta delta^0.25``, D = B compressing / A restoring, E = C compressing / A restoring,
 and the generalized ``beta delta^n delta_dot`` (eq 3.2). Restitution-parameterised laws
 ``F_d = chi(e) K delta^nH delta_dot / v_approach`` with the literature's factors:
@@ -105,7 +105,10 @@ def contact_force(delta, delta_dot, rho_c, compressing, approach, p):
     rho_c : float
         Cam curvature radius at the contact [m].
     compressing : float
-        1 while compressing (laws D and E), else 0.
+        1 while compressing, else 0 (kept for the hybrid mode; laws D and E switch on
+        the sign of ``delta_dot`` itself: their damping force ``c delta_dot`` is
+        continuous there, so the switch needs no event, and an event on ``delta_dot``
+        would chatter on rounding noise in sustained stiff contact).
     approach : float
         Approach velocity of this contact [m/s] (restitution laws).
     p : ndarray
@@ -131,14 +134,14 @@ def contact_force(delta, delta_dot, rho_c, compressing, approach, p):
     c = 0.0
     if code == 1:
         c = p[L.VISCOUS_C]
-    elif code == 2:
-        c = p[L.BETA] * kd
+    elif code == 2:  # c = beta F_k(delta): beta [s/m] times a force (see docs/model.md)
+        c = p[L.BETA] * kd * ad
     elif code == 3:
         c = p[L.BETA] * ad ** 0.25
-    elif code == 4:
-        c = p[L.BETA] * kd if compressing > 0.5 else p[L.VISCOUS_C]
+    elif code == 4:  # the switch on the sign of delta_dot keeps F_d continuous (c delta_dot -> 0)
+        c = p[L.BETA] * kd * ad if delta_dot > 0.0 else p[L.VISCOUS_C]
     elif code == 5:
-        c = p[L.BETA] * ad ** 0.25 if compressing > 0.5 else p[L.VISCOUS_C]
+        c = p[L.BETA] * ad ** 0.25 if delta_dot > 0.0 else p[L.VISCOUS_C]
     elif code == 6:
         n = p[L.EXPONENT]
         if n == 1.5:

@@ -24,7 +24,7 @@ __all__ = [
 DAMPING_LAWS = {
     "none": 0,
     "viscous": 1,                 # A: c = 2 zeta omega_n I_P / chi*^2       (eq 2.24, 4.20)
-    "stiffness-proportional": 2,  # B: c = beta k(delta), k = F_k / delta    [beta: s/m]
+    "stiffness-proportional": 2,  # B: c = beta F_k(delta) (eq 2.25)          [beta: s/m]
     "zhang-whiten": 3,            # C: c = beta delta^0.25                    [N s / m^1.25]
     "stiffness-proportional-viscous": 4,  # D: B while compressing, A while restoring
     "zhang-whiten-viscous": 5,    # E: C while compressing, A while restoring

@@ -57,22 +57,29 @@ def plot_time_history(ds: xr.Dataset, path: str | Path, revolutions: float = 3.0
 
 
 def plot_spectrum(ds: xr.Dataset, path: str | Path, variable: str = "alpha_ddot",
-                  harmonics: int = 10) -> Path:
-    """Amplitude spectrum of ``variable`` over whole revolutions, cam harmonics marked."""
+                  harmonics: int = 10, revolutions: int | None = None, resonances=(), others=()) -> Path:
+    """Amplitude spectrum of ``variable`` over whole revolutions: cam harmonics marked (grey),
+    the linearized natural frequency (red dashed) and ``resonances`` [Hz] (triangles).
+    ``others``: (label, Dataset) pairs drawn on the same axes for comparison."""
     from camdyn.analysis.harmonics import amplitude_spectrum
-    freq, amp = amplitude_spectrum(ds, variable)
+    freq, amp = amplitude_spectrum(ds, variable, revolutions)
     speed = float(ds.attrs.get("speed_hz", 0.0))
     fig, ax = plt.subplots(figsize=(8, 4))
-    ax.semilogy(freq, np.maximum(amp, 1e-12), lw=0.8)
+    ax.semilogy(freq, np.maximum(amp, 1e-12), lw=0.8, label=ds.attrs.get("label", "camdyn"))
+    for label, other in others:
+        f2, a2 = amplitude_spectrum(other, variable, revolutions)
+        ax.semilogy(f2, np.maximum(a2, 1e-12), lw=0.8, label=label)
     if speed:
         for k in range(1, harmonics + 1):
             ax.axvline(k * speed, color="0.8", lw=0.5, zorder=0)
+    for f in resonances:
+        ax.plot([f], [np.interp(f, freq, amp)], "v", color="C3", ms=6)
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel(f"|{variable}| [{ds[variable].attrs.get('units', '-')}]")
     fn = float(ds.attrs.get("natural_frequency_Hz", 0.0) or 0.0)
     if fn == fn and fn > 0:
         ax.axvline(fn, color="C3", lw=0.8, ls="--", label=f"linearized natural frequency {fn:.0f} Hz")
-        ax.legend(loc="upper right", fontsize=8)
+    ax.legend(loc="upper right", fontsize=8)
     upper = max(40 * speed, 1.5 * fn if fn == fn else 0.0) if speed else freq[-1]
     ax.set_xlim(0, min(freq[-1], upper))
     return _save(fig, path)
@@ -262,4 +269,64 @@ def plot_sweep(ds: xr.Dataset, path: str | Path) -> Path:
         ax.set_xlabel(_label(first))
         ax.set_ylabel(_label(second))
         ax.set_title(ds[name].attrs.get("long_name", name), fontsize=9)
+    return _save(fig, path)
+
+
+def _map_categories(ds: xr.Dataset):
+    """Simulation regions of a regime map: codes and labels (periodic impacts split by k)."""
+    regime = ds["regime"].values
+    rate = ds["impacts_per_revolution"].values
+    codes = np.full(regime.shape, -1, dtype=int)
+    labels = {-1: "failed", 0: "contact kept", 1: "contact kept, vr reversal", 2: "irregular impacts"}
+    codes[regime == 0] = 0
+    codes[regime == 1] = 1
+    codes[regime == 3] = 2
+    periodic = regime == 2
+    ks = sorted(set(np.round(rate[periodic], 2)))
+    for i, k in enumerate(ks):
+        codes[periodic & (np.round(rate, 2) == k)] = 3 + i
+        labels[3 + i] = f"periodic, {k:g} impacts/rev"
+    return codes, labels
+
+
+def plot_regime_map(ds: xr.Dataset, path: str | Path) -> Path:
+    """Regime map (:func:`camdyn.analysis.regime_map.regime_map`): simulated regions over
+    the two swept parameters, with the inverse-kinematics loss-of-contact curve (solid)
+    and the boundary of sliding-velocity reversal (dashed)."""
+    from matplotlib.colors import ListedColormap
+
+    dims = list(ds["regime"].dims)
+    x, y = ds[dims[0]], ds[dims[1]]
+    codes, labels = _map_categories(ds)
+    fixed = ["#000000", "#2ca02c", "#ff7f0e", "#d62728"]
+    periodic = plt.get_cmap("Blues")(np.linspace(0.45, 0.95, max(1, len(labels) - 4)))
+    colours = fixed + [tuple(c) for c in periodic][:len(labels) - 4]
+    fig, ax = plt.subplots(figsize=(7.5, 5))
+    ax.pcolormesh(x.values, y.values, codes.T, shading="nearest", vmin=-1.5, vmax=len(colours) - 1.5,
+                  cmap=ListedColormap(colours))
+    present = set(np.unique(codes))
+    for c, label in labels.items():
+        if c in present:
+            ax.plot([], [], "s", color=colours[c + 1], label=label, markersize=9)
+    if "loss_of_contact_speed" in ds:
+        curve = ds["loss_of_contact_speed"]
+        other = curve.dims[0]
+        if other == dims[0]:
+            ax.plot(x.values, curve.values, "k-", lw=1.5, label="loss of contact (inverse kinematics)")
+        else:
+            ax.plot(curve.values, y.values, "k-", lw=1.5, label="loss of contact (inverse kinematics)")
+    kin = ds["kinematic_regime"].values.astype(float)
+    if np.any(kin == 1) and kin.shape[0] > 1 and kin.shape[1] > 1:
+        ax.contour(x.values, y.values, (kin == 1).T.astype(float), levels=[0.5], colors="k", linestyles="--",
+                   linewidths=1.0)
+        ax.plot([], [], "k--", label="vr reversal (inverse kinematics)")
+    agree = {k[len("agreement_"):]: ds.attrs[k] for k in ds.attrs if k.startswith("agreement_")}
+    if agree:
+        ax.set_title(f"simulation agrees with inverse kinematics at {agree['kept_agree']}/{agree['kept']} points "
+                     f"in contact and {agree['lost_agree']}/{agree['lost']} beyond", fontsize=9)
+    ax.set_xlim(x.values.min(), x.values.max())
+    ax.set_ylim(y.values.min(), y.values.max())
+    ax.set_xlabel(_label(x))
+    ax.set_ylabel(_label(y))
+    ax.legend(fontsize=7, loc="best", framealpha=0.9)
     return _save(fig, path)

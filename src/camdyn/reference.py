@@ -96,7 +96,7 @@ class ReferenceModel:
         elif law == "power":
             fd = s.contact.beta * abs(delta) ** s.contact.exponent * delta_dot
         elif law == "stiffness-proportional":
-            fd = s.contact.beta * kdel * delta_dot
+            fd = s.contact.beta * kdel * abs(delta) * delta_dot  # beta F_k(delta)
         elif law == "zhang-whiten":
             fd = s.contact.beta * abs(delta) ** 0.25 * delta_dot
         else:

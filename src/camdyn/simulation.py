@@ -73,7 +73,7 @@ def impact_table(events: np.ndarray) -> dict:
             start = ev
             peak_delta = 0.0
             peak_force = 0.0
-        elif start is not None and k == 2 and new_sign < 0:
+        elif start is not None and k == 2 and new_sign <= 0:  # end of compression
             peak_delta = max(peak_delta, ev[5])
             peak_force = max(peak_force, ev[8])
         elif start is not None:

@@ -16,8 +16,9 @@ PEy cos a*) + ks dx (dx sec^2 a* + wb/2 sec a* tan a*)`` and ``F_l = e k (chi* s
 Theta) - delta* cos(a* + Theta))`` (tested). Choices, written down:
 
 - the damping laws D and E switch between two coefficients on the sign of the
-  penetration rate; the linear model uses their mean, the equivalent linear damper of
-  a bilinear one under harmonic motion (half a cycle each);
+  penetration rate; the central difference across ``delta_dot = 0`` gives their mean,
+  the equivalent linear damper of a bilinear one under harmonic motion (half a cycle
+  each);
 - Coulomb friction keeps the sign the turning cam gives it (the model is only valid
   while ``vr`` does not reverse); tanh friction is linearized like everything else;
 - restitution-parameterised laws use the reference approach velocity, as the static
@@ -47,8 +48,8 @@ from camdyn.parameters import System
 __all__ = ["LinearModel", "linearize"]
 
 
-def _moment(p, t, alpha, alpha_dot, slip, compressing) -> float:
-    mode = np.array([1.0, slip, compressing, p[L.V_REFERENCE], 0.0])
+def _moment(p, t, alpha, alpha_dot, slip) -> float:
+    mode = np.array([1.0, slip, 0.0, p[L.V_REFERENCE], 0.0])
     return evaluate(t, alpha, alpha_dot, mode, p)[0] * p[L.INERTIA]
 
 
@@ -80,7 +81,6 @@ class LinearModel:
     speed: float
     _p: np.ndarray
     _slip: float
-    _compressing: tuple
 
     @property
     def natural_frequency(self) -> float:
@@ -103,10 +103,8 @@ class LinearModel:
         a = self.equilibrium_angle
         out = np.empty_like(t)
         for i, ti in enumerate(t):
-            d = 0.0
-            for c in self._compressing:
-                d += _moment(plus, ti, a, 0.0, self._slip, c) - _moment(minus, ti, a, 0.0, self._slip, c)
-            out[i] = self.runout * d / (2.0 * eps * len(self._compressing))
+            d = _moment(plus, ti, a, 0.0, self._slip) - _moment(minus, ti, a, 0.0, self._slip)
+            out[i] = self.runout * d / (2.0 * eps)
         return out
 
     def forcing_amplitude(self) -> complex:
@@ -185,20 +183,14 @@ def linearize(system: System, speed=None) -> LinearModel:
     a = concentric.equilibrium.angle
     from camdyn.model.equilibrium import _static_parameters
     slip = 1.0 if _static_parameters(system, concentric.theta0)[L.MU] >= 0 else -1.0
-    law = system.contact.damping
-    compressing = (1.0, 0.0) if law in ("stiffness-proportional-viscous", "zhang-whiten-viscous") else (1.0,)
     ha = 1e-7
     hv = 1e-6
-    k = c = 0.0
-    for comp in compressing:
-        k -= (_moment(p, 0.0, a + ha, 0.0, slip, comp) - _moment(p, 0.0, a - ha, 0.0, slip, comp)) / (2 * ha)
-        c -= (_moment(p, 0.0, a, hv, slip, comp) - _moment(p, 0.0, a, -hv, slip, comp)) / (2 * hv)
-    k /= len(compressing)
-    c /= len(compressing)
+    k = -(_moment(p, 0.0, a + ha, 0.0, slip) - _moment(p, 0.0, a - ha, 0.0, slip)) / (2 * ha)
+    c = -(_moment(p, 0.0, a, hv, slip) - _moment(p, 0.0, a, -hv, slip)) / (2 * hv)
     if not k > 0:
         raise ParameterError(f"the linearized stiffness is {k:.3g} N m/rad: the equilibrium is not stable")
     motion = system.motion
     hz = float(motion.speed) if motion.kind == "constant" else 0.0
     p[L.RUNOUT] = 0.0
     return LinearModel(inertia=system.follower.inertia, stiffness=k, damping=c, equilibrium_angle=a,
-                       runout=system.cam.runout, speed=hz, _p=p, _slip=slip, _compressing=compressing)
+                       runout=system.cam.runout, speed=hz, _p=p, _slip=slip)

@@ -83,8 +83,9 @@ def expected_sign(system, k, mode, p):
             return 0.0
         if k == 1:
             return mode[L.MODE_SLIP] if p[L.FRICTION_LAW] == 1.0 else 0.0
-        # peak penetration: needed by laws D and E, and for the impact table
-        if mode[L.MODE_IMPACT] > 0.5 or p[L.DAMPING_LAW] == 4.0 or p[L.DAMPING_LAW] == 5.0:
+        # peak penetration of an impact, for the impact table (laws D and E switch on
+        # the sign of delta_dot inside the force law and need no event)
+        if mode[L.MODE_IMPACT] > 0.5:
             return 1.0 if mode[L.MODE_COMPRESSING] > 0.5 else -1.0
         return 0.0
     if k == 0:
@@ -108,6 +109,11 @@ def transition(system, k, t, y, values, mode, p):
             mode[L.MODE_SLIP] = -mode[L.MODE_SLIP]
         else:
             mode[L.MODE_COMPRESSING] = 1.0 - mode[L.MODE_COMPRESSING]
+            if mode[L.MODE_COMPRESSING] < 0.5:
+                # the impact's peak is passed (its force peaks at or before it): stop
+                # watching delta_dot, which in sustained stiff contact hovers at zero and
+                # would cross it on rounding noise alone
+                mode[L.MODE_IMPACT] = 0.0
     else:
         mode[0] = -mode[0]
 

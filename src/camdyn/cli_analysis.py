@@ -1,0 +1,120 @@
+"""``camdyn map`` (regime map over two parameters) and ``camdyn spectrum`` (spectra with
+the cam harmonics and resonances marked)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import List, Optional
+
+import typer
+
+from camdyn.cli_tools import SetOption, _print_json, _system, console
+from camdyn.errors import ParameterError
+
+_ALIASES = {"speed": "motion.speed"}
+
+
+def _axis(text: str, option: str) -> dict:
+    """``KEY=START:STOP:COUNT`` or ``KEY=V1,V2,...`` (units as text) -> a [[vary]] table."""
+    key, sep, grid = text.partition("=")
+    if not sep or not key.strip() or not grid.strip():
+        raise ParameterError(f"{option}: expected KEY=START:STOP:COUNT or KEY=V1,V2,..., got {text!r}")
+    key = _ALIASES.get(key.strip(), key.strip())
+    if ":" in grid:
+        parts = grid.split(":")
+        if len(parts) != 3:
+            raise ParameterError(f"{option}: expected START:STOP:COUNT, got {grid!r}")
+        try:
+            num = int(parts[2])
+        except ValueError:
+            raise ParameterError(f"{option}: COUNT must be a whole number, got {parts[2]!r}") from None
+        return {"key": key, "start": parts[0], "stop": parts[1], "num": num}
+    return {"key": key, "values": [v.strip() for v in grid.split(",")]}
+
+
+def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
+                       x: str = typer.Option(..., "--x", help="First axis: KEY=START:STOP:COUNT, e.g. "
+                                                              "spring.stiffness=1000N/m:3000N/m:20."),
+                       y: str = typer.Option("speed=60rpm:200rpm:30", "--y", help="Second axis, the same form "
+                                                                                  "('speed' = motion.speed)."),
+                       set_: Optional[List[str]] = SetOption,
+                       revolutions: int = typer.Option(60, help="Cam periods simulated per point."),
+                       discard: int = typer.Option(30, help="Of which the first are dropped (transient)."),
+                       out: Path = typer.Option(Path("regime_map.nc"), help="Result file (.nc)."),
+                       plot: Optional[Path] = typer.Option(None, help="Figure (default: the result's name, .png)."),
+                       workers: Optional[int] = typer.Option(None, help="Worker processes (default every core)."),
+                       dask: Optional[str] = typer.Option(None, help="'local' or a scheduler tcp://HOST:PORT."),
+                       restart: bool = typer.Option(False, help="Discard checkpoints instead of resuming."),
+                       quiet: bool = typer.Option(False, help="No progress bar.")):
+    """Regime map over two parameters: every point simulated (contact kept, vr reversal, k
+    impacts per revolution, irregular), beside the inverse-kinematics prediction."""
+    from camdyn.analysis.regime_map import regime_map
+    from camdyn.config import parse_assignments
+    from camdyn.plotting import plot_regime_map
+    from camdyn.sweeps import spec_from_dict
+
+    if out.suffix not in (".nc", ".h5"):
+        raise ParameterError(f"--out must end in .nc, got {out.name!r}")
+    first, second = _axis(x, "--x"), _axis(y, "--y")
+    if first["key"] == second["key"]:
+        raise ParameterError("--x and --y vary the same parameter")
+    table = {"system": {"source": source, "set": parse_assignments(set_)},
+             "vary": [first, second],
+             "run": {"revolutions": revolutions, "discard": discard},
+             "metrics": {"names": ["regime", "impacts", "residual", "max_force"]},
+             "output": {"path": str(out)}}
+    spec = spec_from_dict(table, name=out.stem)
+    ds = regime_map(spec, workers=workers, dask=dask, progress=not quiet, restart=restart,
+                    echo=lambda msg: console.print(msg, highlight=False, soft_wrap=True))
+    figure = plot_regime_map(ds, plot or out.with_suffix(".png"))
+    a = {k[len("agreement_"):]: ds.attrs[k] for k in ds.attrs if k.startswith("agreement_")}
+    console.print(f"wrote {out} and {figure}; simulation agrees with inverse kinematics at "
+                  f"{a['kept_agree']}/{a['kept']} points kept in contact and {a['lost_agree']}/{a['lost']} "
+                  f"beyond the loss of contact", highlight=False, soft_wrap=True)
+
+
+def spectrum(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
+             set_: Optional[List[str]] = SetOption,
+             speed: Optional[str] = typer.Option(None, help="Cam speed, e.g. 300rpm or 5Hz (default the preset's)."),
+             revolutions: float = typer.Option(40.0, help="Cam periods simulated."),
+             window: int = typer.Option(20, help="Whole revolutions at the end analysed (Hann window)."),
+             variable: str = typer.Option("alpha_ddot", help="alpha_ddot, alpha, Fn, Ff, Nx, Ny, ..."),
+             sample_rate: str = typer.Option("20kHz", help="Output sample rate."),
+             harmonics: int = typer.Option(10, help="Cam harmonics listed."),
+             peaks: int = typer.Option(3, help="Largest peaks away from the cam harmonics listed (resonances)."),
+             plot: Optional[Path] = typer.Option(None, help="Figure path (PNG)."),
+             json_: bool = typer.Option(False, "--json", help="Print JSON.")):
+    """Amplitude spectrum of a simulated response: cam harmonics, resonance peaks and the
+    linearized natural frequency."""
+    from camdyn.analysis.spectra import spectrum_summary
+    from camdyn.cli_tools import _hertz
+    from camdyn.plotting import plot_spectrum
+    from camdyn.simulation import simulate
+
+    system = _system(source, set_)
+    ds = simulate(system, speed=speed, revolutions=revolutions, sample_rate=_hertz(sample_rate))
+    if variable not in ds or ds[variable].dims != ("time",):
+        raise ParameterError(f"--variable must be a time series of the result, one of "
+                             f"{sorted(k for k in ds.data_vars if ds[k].dims == ('time',))}, got {variable!r}")
+    summary = spectrum_summary(ds, variable, window=window, harmonics=harmonics, peaks=peaks)
+    if plot is not None:
+        plot_spectrum(ds, plot, variable=variable, harmonics=harmonics, revolutions=window,
+                      resonances=[p["frequency_hz"] for p in summary["peaks"]])
+    if json_:
+        _print_json(summary)
+        return
+    unit = summary["units"]
+    console.print(f"{variable} at {summary['speed_hz']:.4g} Hz, last {window} revolutions "
+                  f"(linearized natural frequency {summary['natural_frequency_hz']:.5g} Hz)", highlight=False)
+    console.print("cam harmonics: " + ", ".join(f"{h['order']}x {h['amplitude']:.4g}"
+                                               for h in summary["harmonics"]) + f" [{unit}]", highlight=False,
+                  soft_wrap=True)
+    for p in summary["peaks"]:
+        console.print(f"peak at {p['frequency_hz']:.5g} Hz: {p['amplitude']:.4g} {unit}", highlight=False)
+    if plot is not None:
+        console.print(f"wrote {plot}", highlight=False)
+
+
+def register(app: typer.Typer) -> None:
+    app.command("map")(regime_map_command)
+    app.command("spectrum")(spectrum)
