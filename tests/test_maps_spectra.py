@@ -1,0 +1,72 @@
+"""camdyn map (regime map: simulation against inverse kinematics) and camdyn spectrum."""
+
+import json
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from camdyn.cli import main
+
+FIG_2_10 = ["--set", "contact.length=1.6mm", "--set", "contact.damping=D", "--set", "contact.damping_ratio=0.01",
+            "--set", "contact.beta=4.25 s/m"]
+
+
+def test_map_boundary_agrees_with_brute_force_simulation(tmp_path, capsys):
+    """Thesis fig 2.9 (ks against speed): every simulated point falls on the side of the
+    inverse-kinematics loss-of-contact curve that the curve predicts, at least 10 points
+    on each side."""
+    out = tmp_path / "map.nc"
+    rc = main(["map", "alzate2007-standin-impacting", "--x", "spring.stiffness=1500N/m:3000N/m:5",
+               "--y", "speed=90rpm:190rpm:6", "--revolutions", "40", "--discard", "20", "--out", str(out),
+               "--workers", "2", "--quiet"])
+    assert rc == 0
+    assert "agrees with inverse kinematics" in capsys.readouterr().out
+    assert out.with_suffix(".png").stat().st_size > 10_000
+    ds = xr.open_dataset(out)
+    assert int((ds.status != 0).sum()) == 0
+    curve = ds.loss_of_contact_speed  # Hz, over spring.stiffness
+    assert np.all(np.diff(curve.values) > 0)  # a stiffer spring holds contact longer (fig 2.9)
+    below = ds["motion.speed"] < curve
+    kept = ds.regime <= 1
+    assert int(below.sum()) >= 10 and int((~below).sum()) >= 10
+    assert bool((kept == below).all())
+    assert ds.attrs["agreement_kept"] == ds.attrs["agreement_kept_agree"] == int(below.sum())
+    assert ds.attrs["agreement_lost"] == ds.attrs["agreement_lost_agree"] == int((~below).sum())
+    assert ds.regime.attrs["units"] and ds.loss_of_contact_speed.attrs["units"] == "Hz"
+
+
+def test_map_refuses_bad_axes(tmp_path, capsys):
+    for args in (["--x", "spring.stiffness"], ["--x", "spring.stiffness=1:2"],
+                 ["--x", "speed=1Hz:2Hz:3", "--y", "speed=1Hz:2Hz:3"], ["--x", "spring.stiffnes=1N/m:2N/m:2"]):
+        assert main(["map", "alzate2007-standin-impacting", *args, "--out", str(tmp_path / "m.nc")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("error:") and len(err.splitlines()) == 1
+
+
+def test_spectrum_marks_the_contact_resonance_and_its_side_bands(tmp_path, capsys):
+    """Thesis fig 2.10: with 1 % damping the contact mode stands out near the linearized
+    natural frequency, flanked by side bands one cam speed apart (the nonlinear
+    modulation that the linear model lacks, fig 2.16)."""
+    figure = tmp_path / "spectrum.png"
+    rc = main(["spectrum", "alzate2007-standin", *FIG_2_10, "--speed", "300rpm", "--revolutions", "10",
+               "--window", "8", "--plot", str(figure), "--json"])
+    assert rc == 0
+    out = json.loads(capsys.readouterr().out)
+    assert figure.stat().st_size > 10_000
+    fn = out["natural_frequency_hz"]
+    peaks = [p["frequency_hz"] for p in out["peaks"]]
+    assert len(peaks) == 3
+    assert abs(peaks[0] - fn) < 0.03 * fn
+    spacing = np.abs(np.array(peaks[1:]) - peaks[0]) / out["speed_hz"]
+    assert np.allclose(spacing, np.round(spacing), atol=0.05) and np.all(np.round(spacing) >= 1)
+    assert out["harmonics"][0]["amplitude"] > 10 * out["harmonics"][1]["amplitude"]
+    assert out["harmonics"][0]["frequency_hz"] == pytest.approx(5.0)
+
+
+def test_spectrum_refusals(capsys):
+    assert main(["spectrum", "alzate2007-standin", "--variable", "nope", "--revolutions", "4",
+                 "--window", "2"]) == 2
+    assert "--variable" in capsys.readouterr().err
+    assert main(["spectrum", "alzate2007-standin", "--revolutions", "4", "--window", "9"]) == 2
+    assert "window" in capsys.readouterr().err
