@@ -40,6 +40,8 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
                        set_: Optional[List[str]] = SetOption,
                        revolutions: int = typer.Option(60, help="Cam periods simulated per point."),
                        discard: int = typer.Option(30, help="Of which the first are dropped (transient)."),
+                       rtol: float = typer.Option(3e-7, help="Relative tolerance of the integrator."),
+                       atol: float = typer.Option(1e-10, help="Absolute tolerance [rad, rad/s]."),
                        out: Path = typer.Option(Path("regime_map.nc"), help="Result file (.nc)."),
                        plot: Optional[Path] = typer.Option(None, help="Figure (default: the result's name, .png)."),
                        workers: Optional[int] = typer.Option(None, help="Worker processes (default every core)."),
@@ -60,7 +62,7 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
         raise ParameterError("--x and --y vary the same parameter")
     table = {"system": {"source": source, "set": parse_assignments(set_)},
              "vary": [first, second],
-             "run": {"revolutions": revolutions, "discard": discard},
+             "run": {"revolutions": revolutions, "discard": discard, "rtol": rtol, "atol": atol},
              "metrics": {"names": ["regime", "impacts", "residual", "max_force"]},
              "output": {"path": str(out)}}
     spec = spec_from_dict(table, name=out.stem)

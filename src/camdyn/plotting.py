@@ -273,7 +273,8 @@ def plot_sweep(ds: xr.Dataset, path: str | Path) -> Path:
 
 
 def _map_categories(ds: xr.Dataset):
-    """Simulation regions of a regime map: codes and labels (periodic impacts split by k)."""
+    """Simulation regions of a regime map: codes and labels (periodic impacts banded by
+    impacts per revolution)."""
     regime = ds["regime"].values
     rate = ds["impacts_per_revolution"].values
     codes = np.full(regime.shape, -1, dtype=int)
@@ -282,10 +283,11 @@ def _map_categories(ds: xr.Dataset):
     codes[regime == 1] = 1
     codes[regime == 3] = 2
     periodic = regime == 2
-    ks = sorted(set(np.round(rate[periodic], 2)))
-    for i, k in enumerate(ks):
-        codes[periodic & (np.round(rate, 2) == k)] = 3 + i
-        labels[3 + i] = f"periodic, {k:g} impacts/rev"
+    bands = [(0.0, 0.999, "periodic, < 1 impact/rev (subharmonic)"), (0.999, 1.001, "periodic, 1 impact/rev"),
+             (1.001, 5.0, "periodic, 1-5 impacts/rev"), (5.0, np.inf, "periodic, > 5 impacts/rev (chattering)")]
+    for i, (low, high, label) in enumerate(bands):
+        codes[periodic & (rate > low) & (rate <= high)] = 3 + i
+        labels[3 + i] = label
     return codes, labels
 
 
@@ -299,8 +301,7 @@ def plot_regime_map(ds: xr.Dataset, path: str | Path) -> Path:
     x, y = ds[dims[0]], ds[dims[1]]
     codes, labels = _map_categories(ds)
     fixed = ["#000000", "#2ca02c", "#ff7f0e", "#d62728"]
-    periodic = plt.get_cmap("Blues")(np.linspace(0.45, 0.95, max(1, len(labels) - 4)))
-    colours = fixed + [tuple(c) for c in periodic][:len(labels) - 4]
+    colours = fixed + [tuple(c) for c in plt.get_cmap("Blues")(np.linspace(0.35, 0.95, 4))]
     fig, ax = plt.subplots(figsize=(7.5, 5))
     ax.pcolormesh(x.values, y.values, codes.T, shading="nearest", vmin=-1.5, vmax=len(colours) - 1.5,
                   cmap=ListedColormap(colours))

@@ -18,7 +18,7 @@ from camdyn.model.outputs import CHANNELS, derived
 from camdyn.parameters import System
 from camdyn.units import parse_speed
 
-__all__ = ["simulate", "prepare", "impact_table", "Prepared"]
+__all__ = ["simulate", "prepare", "impact_table", "Prepared", "penetration_resolution"]
 
 METHODS = {"auto": driver.METHOD_AUTO, "explicit": driver.METHOD_EXPLICIT,
            "dop853": driver.METHOD_DOP853, "rosenbrock": driver.METHOD_ROSENBROCK}
@@ -45,6 +45,24 @@ class Prepared:
 def prepare(system: System) -> Prepared:
     """Validate ``system`` against its geometry and compute the initial state."""
     return Prepared(system)
+
+
+def penetration_resolution(prep: Prepared, rtol: float, atol: float) -> float:
+    """Ratio of the integration error the tolerances allow in the penetration [m] to the
+    static penetration ``delta*`` [m] (0 when the follower rests off the cam).
+
+    The local error in ``alpha`` is about ``rtol |alpha| + atol`` [rad], with ``|alpha|``
+    up to ``|alpha*| + e/chi*``; times ``chi*`` it is an error in the penetration. When it
+    is not well below ``delta*`` (a stiff, lightly preloaded contact: nanometres), the
+    solver's own error can open the contact and record spurious impacts; tighten
+    ``rtol``/``atol`` until this ratio is below about 0.1.
+    """
+    eq = prep.equilibrium
+    if not eq.in_contact or eq.penetration <= 0.0:
+        return 0.0
+    chi = abs(eq.moment_arm)
+    swing = abs(eq.angle) + prep.system.cam.runout / chi
+    return (rtol * swing + atol) * chi / eq.penetration
 
 
 def _with_speed(system: System, speed) -> System:

@@ -35,7 +35,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from camdyn.core import driver
 from camdyn.errors import CamdynError, ParameterError, SimulationError
 from camdyn.model.layout import SIZE
-from camdyn.simulation import prepare
+from camdyn.simulation import penetration_resolution, prepare
 from camdyn.sweeps import kernel
 from camdyn.sweeps import metrics as M
 from camdyn.sweeps.spec import SweepSpec
@@ -139,6 +139,18 @@ def _executor(workers: int, dask: str | None, threads: int):
         yield client.get_executor(), max(n, 1), f"Dask at {client.scheduler.address} ({n} workers)"
 
 
+def _check_resolution(spec: SweepSpec, say) -> None:
+    """Warn when the tolerances cannot resolve the base system's static penetration."""
+    try:
+        ratio = penetration_resolution(prepare(spec.base_system()), spec.rtol, spec.atol)
+    except CamdynError:
+        return
+    if ratio > 0.1:
+        say(f"warning: rtol = {spec.rtol:g}, atol = {spec.atol:g} allow an error of {ratio:.2g} times the static "
+            f"penetration, so the solver's own error may open the contact (spurious impacts); set [run] rtol "
+            f"near {spec.rtol * 0.1 / ratio:.1g} (and atol lower) to resolve it")
+
+
 def run_sweep(spec: SweepSpec, workers: int | None = None, dask: str | None = None, threads: int = 1,
               progress: bool = True, restart: bool = False, keep_parts: bool = False,
               echo=None) -> xr.Dataset:
@@ -177,6 +189,7 @@ def run_sweep(spec: SweepSpec, workers: int | None = None, dask: str | None = No
     store = Checkpoint(spec, restart=restart)
     done = store.done()
     todo = [c for c in range(spec.chunks) if c not in done]
+    _check_resolution(spec, say)
     if done:
         say(f"resuming: {len(done)} of {spec.chunks} chunks already on disk in {store.folder}")
     if todo:
