@@ -19,26 +19,36 @@ def _harmonics(ds, variable, order=3, revolutions=10):
     return fit_harmonics(win.time.values, win[variable].values, SPEED, order)
 
 
-def test_closed_form_line_contact_without_friction_or_damping(standin_rig):
-    """K_l and F_l(t) of a frictionless, undamped line contact, derived by hand."""
-    s = standin_rig.with_values(**{"friction.coefficient": 0.0, "contact.damping": "none", "cam.runout": 1e-3})
+@pytest.mark.parametrize("kind", ["line", "point"])
+def test_closed_form_without_friction_or_damping(standin_rig, kind):
+    """K_l and F_l(t) of a frictionless, undamped contact on the bar face, derived by hand:
+    line contact (F = k delta) and the pinless point contact of eq 2.34 (F = (4/3) E*
+    sqrt(rc) delta^1.5, whose contact stiffness dF/d delta is 2 E* sqrt(rc delta))."""
+    s = standin_rig.with_values(**{"friction.coefficient": 0.0, "contact.damping": "none", "cam.runout": 1e-3,
+                                   "contact.kind": kind})
     lm = linearize(s, SPEED)
     a = lm.equilibrium_angle
     pex, pey = s.cam.pivot_x, s.cam.pivot_y
     h = 0.5 * s.follower.width
     rc = s.cam.semi_major
-    k = math.pi / 4 * s.contact.length / (2 * (1 - 0.3 ** 2) / 200e9)
+    e_star = 1 / (2 * (1 - 0.3 ** 2) / 200e9)
     chi = pex * math.cos(a) - pey * math.sin(a)
     delta = h + rc - (pex * math.sin(a) + pey * math.cos(a))
+    if kind == "line":
+        force = math.pi / 4 * e_star * s.contact.length * delta
+        k = math.pi / 4 * e_star * s.contact.length
+    else:
+        force = 4 / 3 * e_star * math.sqrt(rc) * delta ** 1.5
+        k = 2 * e_star * math.sqrt(rc * delta)
     ks, dx, wb = s.spring.stiffness, s.spring.attachment_x, s.follower.width
     sec = 1 / math.cos(a)
-    stiffness = k * chi ** 2 + k * delta * (pex * math.sin(a) + pey * math.cos(a)) \
+    stiffness = k * chi ** 2 + force * (pex * math.sin(a) + pey * math.cos(a)) \
         + ks * dx * (dx * sec ** 2 + 0.5 * wb * sec * math.tan(a))
     assert lm.stiffness == pytest.approx(stiffness, rel=1e-6)
     assert abs(lm.damping) < 1e-9 * stiffness
     t = np.linspace(0.0, 1.0 / SPEED, 17)
     theta = lm._p[camdyn.model.layout.THETA0] + 2 * math.pi * SPEED * t
-    expected = 1e-3 * k * (chi * np.sin(a + theta) - delta * np.cos(a + theta))
+    expected = 1e-3 * (k * chi * np.sin(a + theta) - force * np.cos(a + theta))
     assert np.allclose(lm.forcing(t), expected, rtol=0, atol=1e-6 * np.abs(expected).max())
 
 

@@ -69,9 +69,12 @@ def test_elliptic_cam_agrees_with_scipy(friction_rig):
     np.testing.assert_allclose(ds.alpha.values, ref[0], rtol=0, atol=1e-6 * scale)
 
 
-def test_line_contact_centre_pivot_agrees_with_scipy(standin_rig):
-    # chapter 2 layout: pivot at the centre of gravity, line contact on the bar face
-    ds, ref, _ = compare_with_reference(standin_rig, 0.1, 2.5)  # 40 ms: the 5 kHz contact mode is costly for SciPy
+@pytest.mark.parametrize("kind", ["line", "point"])
+def test_contact_on_bar_face_centre_pivot_agrees_with_scipy(standin_rig, kind):
+    # chapter 2 layout: pivot at the centre of gravity, contact on the bar face: line
+    # contact, or the pinless point contact of eq 2.34 (the cam's curvature alone)
+    s = standin_rig.with_values(**{"contact.kind": kind})
+    ds, ref, _ = compare_with_reference(s, 0.1, 2.5)  # 40 ms: the 5 kHz contact mode is costly for SciPy
     scale = np.max(np.abs(ref[0]))
     np.testing.assert_allclose(ds.alpha.values, ref[0], rtol=0, atol=1e-6 * scale)
 

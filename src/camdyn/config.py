@@ -43,7 +43,7 @@ SCHEMA: dict[str, tuple[str, str]] = {
     "follower.cg_distance": ("m", "distance from the pivot to the centre of gravity"),
     "follower.length": ("m", "bar length"),
     "follower.width": ("m", "bar width wb"),
-    "follower.pin_radius": ("m", "dowel-pin radius rd (0: contact on the bar face)"),
+    "follower.pin_radius": ("m", "dowel-pin radius rd (0: contact on the bar face; a point contact then uses the cam curvature alone, eq 2.34)"),
     "follower.youngs_modulus": ("Pa", "Young's modulus of the follower"),
     "follower.poisson_ratio": ("", "Poisson's ratio of the follower"),
     "follower.accelerometer_distance": ("m", "distance l_a of the tangential accelerometer from the pivot"),

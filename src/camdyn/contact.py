@@ -37,7 +37,10 @@ __all__ = [
 
 
 def equivalent_radius(cam_radius: float, pin_radius: float) -> float:
-    """``rho_e = (1/rho_c + 1/rd)^-1`` [m] of the crossed-cylinder point contact (eq 4.18)."""
+    """``rho_e = (1/rho_c + 1/rd)^-1`` [m] of the crossed-cylinder point contact (eq 4.18);
+    ``rd = 0`` (no pin: the cam on the bar face) gives the cam's radius alone (eq 2.34)."""
+    if pin_radius == 0.0:
+        return cam_radius
     return 1.0 / (1.0 / cam_radius + 1.0 / pin_radius)
 
 
@@ -123,7 +126,8 @@ def contact_force(delta, delta_dot, rho_c, compressing, approach, p):
     """
     ad = abs(delta)
     if p[L.CONTACT_KIND] == 0.0:
-        rho_e = 1.0 / (1.0 / rho_c + 1.0 / p[L.PIN])
+        # crossed cylinders (eq 4.18); no pin: the cam's curvature alone (eq 2.34)
+        rho_e = rho_c if p[L.PIN] == 0.0 else 1.0 / (1.0 / rho_c + 1.0 / p[L.PIN])
         k = 4.0 / 3.0 * p[L.ESTAR] * math.sqrt(rho_e)
         kd = k * math.sqrt(ad)          # k(delta) = F_k / delta
     else:

@@ -385,10 +385,6 @@ class System:
         if not math.isfinite(self.gravity):
             raise ParameterError("environment.gravity must be finite")
         _nonnegative("environment", "gravity", self.gravity)
-        if self.contact.kind == "point" and self.follower.pin_radius <= 0:
-            raise ParameterError(
-                "point contact needs follower.pin_radius > 0 (crossed cylinders); "
-                "use contact.kind = 'line' for contact on the bar face")
         # The follower's contact line must pass below the cam pivot region: the cam
         # pivot has to be on the cam's side of the follower (MODEL.md §1: cam above).
         h = self.follower.surface_offset

@@ -82,7 +82,8 @@ class ReferenceModel:
     def normal_force(self, delta, delta_dot, rho):
         s = self.s
         if s.contact.kind == "point":
-            rho_e = 1.0 / (1.0 / rho + 1.0 / s.follower.pin_radius)
+            rd = s.follower.pin_radius
+            rho_e = rho if rd == 0.0 else 1.0 / (1.0 / rho + 1.0 / rd)
             k = 4.0 / 3.0 * self.estar * math.sqrt(rho_e)
             fk = k * math.copysign(abs(delta) ** 1.5, delta)
             kdel = k * math.sqrt(abs(delta))

@@ -212,7 +212,8 @@ def linearize(system: System, speed=None) -> LinearModel:
     a = concentric.equilibrium.angle
     from camdyn.model.equilibrium import _static_parameters
     slip = 1.0 if _static_parameters(system, concentric.theta0)[L.MU] >= 0 else -1.0
-    ha = 1e-7
+    eq = concentric.equilibrium   # a step small against the penetration (Hertz's delta^1.5 curves)
+    ha = min(1e-7, 1e-3 * eq.penetration / abs(eq.moment_arm))
     hv = 1e-6
     k = -(_moment(p, 0.0, a + ha, 0.0, slip) - _moment(p, 0.0, a - ha, 0.0, slip)) / (2 * ha)
     c = -(_moment(p, 0.0, a, hv, slip) - _moment(p, 0.0, a, -hv, slip)) / (2 * hv)

@@ -193,6 +193,9 @@ def contact_conditions(system: System, speed: float | None = None, lubricant: Lu
     e_star = effective_modulus(system)
     if system.contact.kind == "point":
         rd = system.follower.pin_radius
+        if rd == 0.0:
+            raise ParameterError("the film thickness of a point contact needs the dowel pin (follower.pin_radius > 0); "
+                                 "for the cam on the bar face use contact.kind = 'line'")
         rho_e = 1.0 / (1.0 / rho_c + 1.0 / rd)                     # eq 4.18
         k = 4.0 / 3.0 * e_star * np.sqrt(rho_e)
         delta = (fn / k) ** (2.0 / 3.0)
