@@ -5,7 +5,7 @@ The thesis gives no geometry for its chapter 2 rig, so these use the documented 
 `alzate2007-standin-impacting` (loses contact at 132 rpm like the thesis's rig, section
 2.5). Trends carry over; absolute numbers are the stand-ins'.
 
-Run: python examples/chapter2_gallery.py [FIGURE ...]   (default: all; about 4 minutes on 2 cores)
+Run: python examples/chapter2_gallery.py [FIGURE ...]   (default: all; about 12 minutes on 2 cores)
 Writes docs/figures/fig2_*.png and prints what each shows.
 """
 
