@@ -36,7 +36,8 @@ __all__ = [
 ]
 
 
-def equivalent_radius(cam_radius: float, pin_radius: float) -> float:
+@numba.njit(cache=True)
+def equivalent_radius(cam_radius, pin_radius):
     """``rho_e = (1/rho_c + 1/rd)^-1`` [m] of the crossed-cylinder point contact (eq 4.18);
     ``rd = 0`` (no pin: the cam on the bar face) gives the cam's radius alone (eq 2.34)."""
     if pin_radius == 0.0:
@@ -95,7 +96,7 @@ def _factor(code, e):
 
 
 @numba.njit(cache=True)
-def contact_force(delta, delta_dot, rho_c, compressing, approach, p):
+def contact_force(delta, delta_dot, rho_c, approach, p):
     """Normal force on the follower [N] while in contact.
 
     Parameters
@@ -107,11 +108,6 @@ def contact_force(delta, delta_dot, rho_c, compressing, approach, p):
         Penetration rate [m/s].
     rho_c : float
         Cam curvature radius at the contact [m].
-    compressing : float
-        1 while compressing, else 0 (kept for the hybrid mode; laws D and E switch on
-        the sign of ``delta_dot`` itself: their damping force ``c delta_dot`` is
-        continuous there, so the switch needs no event, and an event on ``delta_dot``
-        would chatter on rounding noise in sustained stiff contact).
     approach : float
         Approach velocity of this contact [m/s] (restitution laws).
     p : ndarray
@@ -126,8 +122,7 @@ def contact_force(delta, delta_dot, rho_c, compressing, approach, p):
     """
     ad = abs(delta)
     if p[L.CONTACT_KIND] == 0.0:
-        # crossed cylinders (eq 4.18); no pin: the cam's curvature alone (eq 2.34)
-        rho_e = rho_c if p[L.PIN] == 0.0 else 1.0 / (1.0 / rho_c + 1.0 / p[L.PIN])
+        rho_e = equivalent_radius(rho_c, p[L.PIN])
         k = 4.0 / 3.0 * p[L.ESTAR] * math.sqrt(rho_e)
         kd = k * math.sqrt(ad)          # k(delta) = F_k / delta
     else:
@@ -142,7 +137,10 @@ def contact_force(delta, delta_dot, rho_c, compressing, approach, p):
         c = p[L.BETA] * kd * ad
     elif code == 3:
         c = p[L.BETA] * ad ** 0.25
-    elif code == 4:  # the switch on the sign of delta_dot keeps F_d continuous (c delta_dot -> 0)
+    elif code == 4:
+        # D and E switch on the sign of delta_dot itself: F_d = c delta_dot is continuous
+        # there, so the switch needs no event (an event on delta_dot would chatter on
+        # rounding noise in sustained stiff contact)
         c = p[L.BETA] * kd * ad if delta_dot > 0.0 else p[L.VISCOUS_C]
     elif code == 5:
         c = p[L.BETA] * ad ** 0.25 if delta_dot > 0.0 else p[L.VISCOUS_C]

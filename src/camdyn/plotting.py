@@ -57,18 +57,14 @@ def plot_time_history(ds: xr.Dataset, path: str | Path, revolutions: float = 3.0
 
 
 def plot_spectrum(ds: xr.Dataset, path: str | Path, variable: str = "alpha_ddot",
-                  harmonics: int = 10, revolutions: int | None = None, resonances=(), others=()) -> Path:
+                  harmonics: int = 10, revolutions: int | None = None, resonances=()) -> Path:
     """Amplitude spectrum of ``variable`` over whole revolutions: cam harmonics marked (grey),
-    the linearized natural frequency (red dashed) and ``resonances`` [Hz] (triangles).
-    ``others``: (label, Dataset) pairs drawn on the same axes for comparison."""
+    the linearized natural frequency (red dashed) and ``resonances`` [Hz] (triangles)."""
     from camdyn.analysis.harmonics import amplitude_spectrum
     freq, amp = amplitude_spectrum(ds, variable, revolutions)
     speed = float(ds.attrs.get("speed_hz", 0.0))
     fig, ax = plt.subplots(figsize=(8, 4))
-    ax.semilogy(freq, np.maximum(amp, 1e-12), lw=0.8, label=ds.attrs.get("label", "camdyn"))
-    for label, other in others:
-        f2, a2 = amplitude_spectrum(other, variable, revolutions)
-        ax.semilogy(f2, np.maximum(a2, 1e-12), lw=0.8, label=label)
+    ax.semilogy(freq, np.maximum(amp, 1e-12), lw=0.8, label=variable)
     if speed:
         for k in range(1, harmonics + 1):
             ax.axvline(k * speed, color="0.8", lw=0.5, zorder=0)

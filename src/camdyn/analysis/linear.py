@@ -119,9 +119,7 @@ class LinearModel:
         """Complex amplitude ``F^`` [N m] with ``F_l(t) = Re(F^ exp(i Omega t))`` (constant speed)."""
         if self.speed <= 0.0:
             raise ParameterError("the forcing is a single harmonic only under constant cam speed")
-        t = np.arange(64) / (64 * self.speed)
-        f = self.forcing(t)
-        return 2.0 * np.mean(f * np.exp(-2j * np.pi * self.speed * t))
+        return complex(self.forcing_series(1)[1])
 
     def receptance(self, frequency) -> np.ndarray:
         """``x^/F^ = 1/(K - I w^2 + i C w)`` [rad/(N m)] at ``frequency`` [Hz]."""

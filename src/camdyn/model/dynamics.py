@@ -99,7 +99,7 @@ def evaluate_shifted(t, alpha, alpha_dot, mode, p, delta_shift):
     fk = 0.0
     power = 0.0
     if mode[L.MODE_CONTACT] > 0.5:
-        fn, fk = contact_force(delta, delta_dot, rho_c, mode[L.MODE_COMPRESSING], mode[L.MODE_APPROACH], p)
+        fn, fk = contact_force(delta, delta_dot, rho_c, mode[L.MODE_APPROACH], p)
         ff = friction_coefficient(vr, mode[L.MODE_SLIP], p) * fn
         moment += fn * chi + ff * p[L.OFFSET]
         power = -fn * n_v + ff * u_v
@@ -165,8 +165,8 @@ def jacobian(t, y, f0, mode, p, jac):
         theta, theta_dot = cam_angle(t, p)
         delta, delta_dot, chi, rho_c, vr, n_v, u_v = contact_kinematics(alpha, ad, theta, theta_dot, p)
         d = 1e-6 * max(abs(delta), 1e-12)
-        fp = contact_force(delta + d, delta_dot, rho_c, mode[L.MODE_COMPRESSING], mode[L.MODE_APPROACH], p)[0]
-        fm = contact_force(delta - d, delta_dot, rho_c, mode[L.MODE_COMPRESSING], mode[L.MODE_APPROACH], p)[0]
+        fp = contact_force(delta + d, delta_dot, rho_c, mode[L.MODE_APPROACH], p)[0]
+        fm = contact_force(delta - d, delta_dot, rho_c, mode[L.MODE_APPROACH], p)[0]
         dfn = (fp - fm) / (2.0 * d)
         mu = friction_coefficient(vr, mode[L.MODE_SLIP], p)
         j10 -= chi * dfn * (chi + mu * p[L.OFFSET]) / p[L.INERTIA]

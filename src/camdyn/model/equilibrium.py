@@ -148,7 +148,7 @@ def static_equilibrium(system: System, theta0: float | None = None) -> Equilibri
                 f"the cam cannot reach the follower: at its rest angle {math.degrees(alpha):.3g} deg the "
                 f"closest approach over a revolution leaves a gap of {-reach*1e6:.3g} um")
     delta, chi, rho_c, _, _ = contact_point(alpha, theta0, ps)
-    fn = contact_force(delta, 0.0, rho_c, 0.0, ps[L.V_REFERENCE], ps)[1] if contact else 0.0
+    fn = contact_force(delta, 0.0, rho_c, ps[L.V_REFERENCE], ps)[1] if contact else 0.0
     eps = 1e-8 * max(abs(alpha), 1e-3)
     k = -(_moment(alpha + eps, ps, contact) - _moment(alpha - eps, ps, contact)) / (2 * eps)
     omega = math.sqrt(k / system.follower.inertia) if k > 0 else float("nan")

@@ -28,6 +28,7 @@ import numpy as np
 import xarray as xr
 
 from camdyn.analysis.kinematics import inverse_kinematics
+from camdyn.contact import equivalent_radius
 from camdyn.errors import ParameterError, PresetError
 from camdyn.model.layout import effective_modulus
 from camdyn.parameters import System
@@ -196,7 +197,7 @@ def contact_conditions(system: System, speed: float | None = None, lubricant: Lu
         if rd == 0.0:
             raise ParameterError("the film thickness of a point contact needs the dowel pin (follower.pin_radius > 0); "
                                  "for the cam on the bar face use contact.kind = 'line'")
-        rho_e = 1.0 / (1.0 / rho_c + 1.0 / rd)                     # eq 4.18
+        rho_e = equivalent_radius(rho_c, rd)                       # eq 4.18
         k = 4.0 / 3.0 * e_star * np.sqrt(rho_e)
         delta = (fn / k) ** (2.0 / 3.0)
         radius = np.sqrt(rho_e * delta)
