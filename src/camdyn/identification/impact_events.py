@@ -59,6 +59,8 @@ class ImpactEvents:
     event_length: np.ndarray          # onset to next onset [s]
     contact_length: np.ndarray        # onset to end of contact [s]
     alpha0: np.ndarray                # alpha at onset [rad]
+    alpha0_map: np.ndarray            # alpha at onset from the return-time map alone [rad] (alpha0
+                                      # differs where it had to be moved onto the cam)
     alpha_dot0: np.ndarray            # alpha_dot at onset [rad/s]
     alpha_ddot0: np.ndarray           # alpha_ddot at onset [rad/s^2]
     theta0: np.ndarray                # cam angle at onset [rad]
@@ -329,7 +331,7 @@ def impact_events(system: System, record: xr.Dataset, speed: float | None = None
     offsets = np.full((count, width), np.nan)
     force = np.full((count, width), np.nan)
     pen = np.full((count, width), np.nan)
-    fields = {k: np.empty(count) for k in ("alpha0", "alpha_dot0", "alpha_ddot0", "theta0", "peak", "length",
+    fields = {k: np.empty(count) for k in ("alpha0", "alpha0_map", "alpha_dot0", "alpha_ddot0", "theta0", "peak", "length",
                                            "contact")}
     alphas, rates = [], []
     leads = np.array([_onset_lead(acc, k, tau) for k in starts])
@@ -347,6 +349,7 @@ def impact_events(system: System, record: xr.Dataset, speed: float | None = None
         theta0, alpha0 = _onset_cam_angle(p, c, alpha_dot0, theta_dot)
         alpha = alpha + (alpha0 - c)
         fields["alpha0"][i] = alpha0
+        fields["alpha0_map"][i] = c
         fields["alpha_dot0"][i] = alpha_dot0
         fields["alpha_ddot0"][i] = _free_before(acc, k0)
         fields["theta0"][i] = theta0
@@ -366,6 +369,7 @@ def impact_events(system: System, record: xr.Dataset, speed: float | None = None
     return ImpactEvents(
         system=system, speed=speed, sample_interval=tau, onset_time=t[starts[:-1]],
         event_length=fields["length"], contact_length=fields["contact"], alpha0=fields["alpha0"],
+        alpha0_map=fields["alpha0_map"],
         alpha_dot0=fields["alpha_dot0"], alpha_ddot0=fields["alpha_ddot0"], theta0=fields["theta0"],
         peak=fields["peak"], offsets=offsets, force=force,
         penetration=pen, alpha=alphas, alpha_dot=rates, noise=noise)

@@ -7,8 +7,11 @@ Per impact event (:mod:`camdyn.identification.impact_events`):
   ``alpha^b = alpha(0) - tau alpha_dot(0)``, ``alpha_dot^b = alpha_dot(0) - tau alpha_ddot(0)``,
   ``Theta^b = Theta(0) - tau Omega``;
 - the approach velocity ``v_a = psi_dot^b`` from eq 3.7 at that state;
-- the separation velocity ``psi_dot^a``: the penetration rate when ``alpha_dot`` peaks
-  after the impact;
+- the separation velocity ``psi_dot^a``: the penetration rate just after an
+  instantaneous impact at the onset, i.e. the first free-flight state after the contact
+  carried back to the onset by the free flight of eq 3.9 (for an instantaneous impact
+  this is the thesis's "peak of alpha_dot"; for a contact of finite length it removes the
+  spring, gravity and cam motion acting during the contact);
 - ``xi_i = -psi_dot^a / psi_dot^b`` (eq 3.25).
 
 ``gamma`` [s/m] is the least-squares slope of ``1 - xi`` against ``v_a`` through the
@@ -21,14 +24,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.integrate import solve_ivp
 
 from camdyn.contact import equivalent_radius, hertz_line_coefficient, hertz_point_coefficient
 from camdyn.errors import IdentificationError
 from camdyn.geometry import contact_kinematics
-from camdyn.identification.impact_events import ImpactEvents, impact_events
+from camdyn.identification.impact_events import ImpactEvents, _onset_cam_angle, impact_events
 from camdyn.model import layout as L
+from camdyn.model.dynamics import free_acceleration
 
-__all__ = ["RestitutionEstimate", "estimate_restitution"]
+__all__ = ["RestitutionEstimate", "estimate_restitution", "free_flight"]
 
 
 @dataclass
@@ -53,6 +58,16 @@ class RestitutionEstimate:
                 "residual": self.residual, "impacts_used": self.impacts_used,
                 "per_impact": {"restitution": self.restitution.tolist(),
                                "approach_velocity": self.approach_velocity.tolist()}}
+
+
+def free_flight(alpha: float, rate: float, duration: float, p: np.ndarray) -> tuple[float, float]:
+    """``(alpha [rad], alpha_dot [rad/s])`` after a free flight (eq 3.9: spring and gravity)
+    of ``duration`` [s] (negative: backwards) from ``(alpha, rate)``."""
+    if duration == 0:
+        return float(alpha), float(rate)
+    sol = solve_ivp(lambda t, y: (y[1], free_acceleration(y[0], p)), (0.0, duration), (alpha, rate),
+                    method="DOP853", rtol=1e-12, atol=1e-14)
+    return float(sol.y[0, -1]), float(sol.y[1, -1])
 
 
 def estimate_restitution(system, record=None, speed: float | None = None, min_impacts: int = 5,
@@ -88,24 +103,31 @@ def estimate_restitution(system, record=None, speed: float | None = None, min_im
     approach = np.empty(k)
     separation = np.empty(k)
     radius = np.empty(k)
+    # one impact per revolution in a periodic motion: every impact happens at the same
+    # follower and cam angles. The contact condition is solved once, for the mean onset
+    # angle: per impact it is badly conditioned near the cam's highest lift, where noise
+    # in the angle moves the root far (or past the cam's reach) and the mean of the
+    # roots is biased.
+    mean_map = float(np.mean(events.alpha0_map))
+    theta0, mean_onset = _onset_cam_angle(p, mean_map, float(np.mean(events.alpha_dot0)), omega)
+    onset = events.alpha0_map + (mean_onset - mean_map)
     for i in range(k):
-        a_b = events.alpha0[i] - tau * events.alpha_dot0[i]
+        a_b = onset[i] - tau * events.alpha_dot0[i]
         ad_b = events.alpha_dot0[i] - tau * events.alpha_ddot0[i]
-        th_b = events.theta0[i] - tau * omega
+        th_b = theta0 - tau * omega
         kin = contact_kinematics(a_b, ad_b, th_b, omega, p)
         approach[i] = kin[1]
         radius[i] = kin[3]
-        v = events.alpha_dot[i]
-        alpha = events.alpha[i]
-        # the peak of alpha_dot after the impact, in the direction of separation, within
-        # the contact (where the free flight accelerates the follower away from the cam,
-        # alpha_dot keeps growing after separation; the contact's end is then the peak)
-        window = int(round((events.contact_length[i] - events.offsets[i, 0]) / tau)) + 3
-        seg = v[:max(window, 3)]
-        direction = 1.0 if seg[-1] >= seg[0] else -1.0
-        j = int(np.argmax(direction * seg))
+        # separation: the first free-flight state after the contact, carried back to the
+        # onset by the free flight of eq 3.9 (what the follower's rate would have been
+        # just after an instantaneous impact; the spring, gravity and cam motion acting
+        # during a contact of finite length are not the contact's restitution)
+        j = min(int(round((events.contact_length[i] - events.offsets[i, 0]) / tau)) + 1,
+                events.alpha[i].size - 1)
         u = events.offsets[i, 0] + j * tau
-        separation[i] = contact_kinematics(alpha[j], v[j], events.theta0[i] + omega * u, omega, p)[1]
+        angle = events.alpha[i][j] - events.alpha0[i] + onset[i]
+        alpha_s, rate_s = free_flight(angle, events.alpha_dot[i][j], -u, p)
+        separation[i] = contact_kinematics(alpha_s, rate_s, theta0, omega, p)[1]
     if np.any(approach <= 0):
         raise IdentificationError("an impact has no approach velocity at its reconstructed onset; the record "
                                   "does not match the rig (check cam.runout and the speed)")
