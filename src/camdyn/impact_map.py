@@ -21,7 +21,7 @@ the same jump of ``alpha_dot`` is spread over a Hann-shaped acceleration pulse t
 starts at the onset, and the follower's angle is integrated through it, so the record
 (``alpha``, ``alpha_dot``, ``alpha_ddot``) is one consistent trajectory that touches the
 cam exactly at each onset. The follower then sinks slightly into the cam during the
-pulse (``v_a w (1 - xi) / 2`` at its end, about 1 um at 39 us): the contact has no
+pulse (``v_a w (1 - xi) / 2`` at its end, a few um for a 156 us pulse): the contact has no
 stiffness in S3, only the restitution law.
 """
 
