@@ -17,6 +17,7 @@ Run:  python examples/impact_damping_tables.py [--restitution-only]
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -104,7 +105,6 @@ def table_3_3(rig):
 
 
 def main():
-    import sys
     rig = camdyn.load_system("sundar2014-impact")
     out = ROOT / "docs" / "impact-damping-tables.md"
     if "--restitution-only" in sys.argv:
@@ -165,7 +165,6 @@ def main():
               "1.17e5 / 0.58e5 / 0.57e5 / 1.14e5, Lambda2 and Lambda3 0.94-1.06; n x 0.98-1.02 gave Lambda1 "
               "8.9e5-1.9e6, Lambda2 0.76-2.49, Lambda3 0.0086-2.07.", ""]
     lines += table_3_3(rig)
-    out = ROOT / "docs" / "impact-damping-tables.md"
     out.write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     print(f"wrote {out}")

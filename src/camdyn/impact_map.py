@@ -111,7 +111,6 @@ def simulate_impact_map(system: System, speed=None, revolutions: float = 30.0, g
     y = np.array([prep.y0[0] + math.copysign(1e-4, chi), 0.0, 0.0])
     t = 0.0
     rows = []
-    pulses = []
     h_max = period / 32.0
     limit = max_impacts if max_impacts is not None else int(20 * revolutions + 100)
     while t < duration:
@@ -148,23 +147,23 @@ def simulate_impact_map(system: System, speed=None, revolutions: float = 30.0, g
             raise SimulationError(f"more than {limit} impacts: the follower chatters (xi near 1 at low "
                                   "approach velocity); shorten the run or lower the restitution")
         if pulse_duration > 0:
-            t, state = _through_pulse(p, t_hit, alpha, rate, new_rate - rate, pulse_duration, t_out, y_out,
-                                      pulses)
+            t, state = _through_pulse(p, t_hit, alpha, rate, new_rate - rate, pulse_duration, t_out, y_out)
             y = np.array([state[0], state[1], 0.0])
         else:
             t = t_hit
             y = np.array([alpha, new_rate, 0.0])
     imp = np.array(rows, dtype=float).reshape(-1, 5)
     acc = np.array([free_acceleration(a, p) if math.isfinite(a) else math.nan for a in y_out[:, 0]])
-    for t_hit, jump in pulses:
-        inside = (t_out >= t_hit) & (t_out < t_hit + pulse_duration)
-        acc[inside] += jump * _hann(t_out[inside] - t_hit, pulse_duration)
+    if pulse_duration > 0:
+        for t_hit, jump in imp[:, [0, 4]]:
+            inside = (t_out >= t_hit) & (t_out < t_hit + pulse_duration)
+            acc[inside] += jump * _hann(t_out[inside] - t_hit, pulse_duration)
     theta = p[L.THETA0] + p[L.OMEGA] * t_out
     ds = xr.Dataset(
         {"alpha": ("time", y_out[:, 0], {"units": "rad", "long_name": "follower angle (clockwise)"}),
          "alpha_dot": ("time", y_out[:, 1], {"units": "rad/s", "long_name": "follower angular velocity"}),
-         "alpha_ddot": ("time", acc, {"units": "rad/s^2", "long_name": "follower angular acceleration "
-                                                                          "(free flight; impulses excluded)"}),
+         "alpha_ddot": ("time", acc, {"units": "rad/s^2", "long_name": "follower angular acceleration " + (
+             "(free flight and impulse pulses)" if pulse_duration > 0 else "(free flight; impulses excluded)")}),
          "cam_angle": ("time", theta, {"units": "rad", "long_name": "cam angle Theta"}),
          "impact_time": ("impact", imp[:, 0], {"units": "s", "long_name": "impact time"}),
          "impact_approach_velocity": ("impact", imp[:, 1], {"units": "m/s", "long_name": "approach velocity"}),
@@ -186,7 +185,7 @@ def _hann(u, width):
     return (1.0 - np.cos(2.0 * math.pi * u / width)) / width
 
 
-def _through_pulse(p, t_hit, alpha, rate, jump, width, t_out, y_out, pulses):
+def _through_pulse(p, t_hit, alpha, rate, jump, width, t_out, y_out):
     """Integrate the follower through one impulse pulse (free flight plus a Hann pulse of
     area ``jump`` [rad/s]), fill the output samples inside it, and return the time and
     ``(alpha, alpha_dot)`` at its end."""
@@ -198,5 +197,4 @@ def _through_pulse(p, t_hit, alpha, rate, jump, width, t_out, y_out, pulses):
     inside = np.flatnonzero((t_out >= t_hit) & (t_out < t_hit + width))
     if inside.size:
         y_out[inside] = sol.sol(t_out[inside]).T
-    pulses.append((t_hit, jump))
     return t_hit + width, sol.y[:, -1]

@@ -33,6 +33,36 @@ def parabola_peak(y0, y1, y2):
 
 
 @numba.njit(cache=True)
+def free_step(a, v, step, p):
+    """One classical Runge-Kutta step [s] of the free flight (eq 3.9: spring and gravity)
+    from ``(a [rad], v [rad/s])``; returns the angle and rate after it."""
+    k1a = v
+    k1v = free_acceleration(a, p)
+    k2a = v + 0.5 * step * k1v
+    k2v = free_acceleration(a + 0.5 * step * k1a, p)
+    k3a = v + 0.5 * step * k2v
+    k3v = free_acceleration(a + 0.5 * step * k2a, p)
+    k4a = v + step * k3v
+    k4v = free_acceleration(a + step * k3a, p)
+    return (a + step * (k1a + 2.0 * k2a + 2.0 * k3a + k4a) / 6.0,
+            v + step * (k1v + 2.0 * k2v + 2.0 * k3v + k4v) / 6.0)
+
+
+@numba.njit(cache=True)
+def free_flight(alpha, rate, duration, p, step_max=5e-6):
+    """``(alpha [rad], alpha_dot [rad/s])`` after a free flight of ``duration`` [s]
+    (negative: backwards) from ``(alpha, rate)``, in equal Runge-Kutta steps of at most
+    ``step_max`` [s]."""
+    n = max(1, int(math.ceil(abs(duration) / step_max)))
+    h = duration / n
+    a = alpha
+    v = rate
+    for _ in range(n):
+        a, v = free_step(a, v, h, p)
+    return a, v
+
+
+@numba.njit(cache=True)
 def return_time(alpha_start, alpha_dot_start, alpha_target, p, step, t_max):
     """Time [s] the free follower takes from ``(alpha_start [rad], alpha_dot_start [rad/s])``
     until its angle comes back to ``alpha_target`` [rad] after turning round.
@@ -47,16 +77,7 @@ def return_time(alpha_start, alpha_dot_start, alpha_target, p, step, t_max):
     turned = False
     direction = 1.0 if alpha_dot_start >= 0.0 else -1.0
     while t < t_max:
-        k1a = v
-        k1v = free_acceleration(a, p)
-        k2a = v + 0.5 * step * k1v
-        k2v = free_acceleration(a + 0.5 * step * k1a, p)
-        k3a = v + 0.5 * step * k2v
-        k3v = free_acceleration(a + 0.5 * step * k2a, p)
-        k4a = v + step * k3v
-        k4v = free_acceleration(a + step * k3a, p)
-        a1 = a + step * (k1a + 2.0 * k2a + 2.0 * k3a + k4a) / 6.0
-        v1 = v + step * (k1v + 2.0 * k2v + 2.0 * k3v + k4v) / 6.0
+        a1, v1 = free_step(a, v, step, p)
         if not turned and v1 * direction < 0.0:
             turned = True
         if turned and (a1 - alpha_target) * direction <= 0.0 < (a - alpha_target) * direction:

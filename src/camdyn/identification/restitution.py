@@ -24,16 +24,15 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from camdyn.contact import equivalent_radius, hertz_line_coefficient, hertz_point_coefficient
 from camdyn.errors import IdentificationError
 from camdyn.geometry import contact_kinematics
 from camdyn.identification.impact_events import ImpactEvents, _onset_cam_angle, impact_events
+from camdyn.identification.impact_kernel import free_flight
 from camdyn.model import layout as L
-from camdyn.model.dynamics import free_acceleration
 
-__all__ = ["RestitutionEstimate", "estimate_restitution", "free_flight"]
+__all__ = ["RestitutionEstimate", "estimate_restitution"]
 
 
 @dataclass
@@ -58,16 +57,6 @@ class RestitutionEstimate:
                 "residual": self.residual, "impacts_used": self.impacts_used,
                 "per_impact": {"restitution": self.restitution.tolist(),
                                "approach_velocity": self.approach_velocity.tolist()}}
-
-
-def free_flight(alpha: float, rate: float, duration: float, p: np.ndarray) -> tuple[float, float]:
-    """``(alpha [rad], alpha_dot [rad/s])`` after a free flight (eq 3.9: spring and gravity)
-    of ``duration`` [s] (negative: backwards) from ``(alpha, rate)``."""
-    if duration == 0:
-        return float(alpha), float(rate)
-    sol = solve_ivp(lambda t, y: (y[1], free_acceleration(y[0], p)), (0.0, duration), (alpha, rate),
-                    method="DOP853", rtol=1e-12, atol=1e-14)
-    return float(sol.y[0, -1]), float(sol.y[1, -1])
 
 
 def estimate_restitution(system, record=None, speed: float | None = None, min_impacts: int = 5,
