@@ -9,11 +9,9 @@ Quick start::
     result["alpha_ddot"].plot()
 """
 
-from camdyn.config import list_presets, load_system
 from camdyn.errors import (
     CamdynError, GeometryError, ParameterError, PresetError, SimulationError, UnitError, UnknownKeyError,
 )
-from camdyn.parameters import Cam, Contact, Follower, Friction, Motion, Spring, System
 
 __version__ = "0.1.0"
 
@@ -25,7 +23,18 @@ __all__ = [
 ]
 
 
-def __getattr__(name):  # lazy: importing camdyn does not compile anything
+_PARAMETERS = ("Cam", "Contact", "Follower", "Friction", "Motion", "Spring", "System")
+
+
+def __getattr__(name):
+    # lazy: importing camdyn (or a compiled submodule, as a sweep's worker process does)
+    # neither compiles anything nor imports pint, xarray or SciPy
+    if name in ("load_system", "list_presets"):
+        from camdyn import config
+        return getattr(config, name)
+    if name in _PARAMETERS:
+        from camdyn import parameters
+        return getattr(parameters, name)
     if name == "simulate":
         from camdyn.simulation import simulate
         return simulate

@@ -16,11 +16,12 @@ from __future__ import annotations
 import math
 
 import numba
+import numpy as np
 
 from camdyn.errors import GeometryError
 from camdyn.model import layout as L
 
-__all__ = ["cam_angle", "contact_kinematics", "contact_point", "zero_state", "contact_point_rate"]
+__all__ = ["cam_angle", "contact_kinematics", "contact_point", "zero_state", "contact_point_rate", "rigid_angles"]
 
 
 @numba.njit(cache=True)
@@ -153,6 +154,24 @@ def contact_point_rate(alpha, alpha_dot, theta, theta_dot, p):
     yc_dot = gy_dot + q1_dot * e1y + q2_dot * e2y + theta_dot * (q1 * e2y - q2 * e1y)
     # chi = u . Xc, du/dt = -alpha_dot n
     return -alpha_dot * (sa * xc + ca * yc) + ux * xc_dot + uy * yc_dot
+
+
+@numba.njit(cache=True)
+def rigid_angles(thetas, p, alpha_start):
+    """Follower angles [rad] with ``delta = 0`` (rigid contact) at each cam angle
+    ``thetas`` [rad], by Newton's method from ``alpha_start`` [rad] (``d delta / d alpha
+    = -chi`` exactly, the envelope theorem)."""
+    out = np.empty_like(thetas)
+    a = alpha_start
+    for i in range(thetas.size):
+        for _ in range(60):
+            delta, chi, rho_c, xc, yc = contact_point(a, thetas[i], p)
+            step = delta / chi
+            a += step
+            if abs(step) < 1e-15:
+                break
+        out[i] = a
+    return out
 
 
 def zero_state(system) -> tuple[float, float]:

@@ -25,7 +25,7 @@ from scipy.optimize import brentq
 
 from camdyn.errors import GeometryError, ParameterError
 from camdyn.friction import friction_coefficient
-from camdyn.geometry import contact_kinematics, contact_point, contact_point_rate
+from camdyn.geometry import contact_kinematics, contact_point, contact_point_rate, rigid_angles
 from camdyn.model import layout as L
 from camdyn.model.dynamics import evaluate
 from camdyn.model.equilibrium import _touch_angle
@@ -33,23 +33,6 @@ from camdyn.model.outputs import pivot_reaction
 from camdyn.parameters import System
 
 __all__ = ["inverse_kinematics", "loss_of_contact_speed", "KinematicCheck", "check_regime"]
-
-
-@numba.njit(cache=True)
-def _rigid_angles(thetas, p, alpha_start):
-    """Follower angles [rad] with ``delta = 0`` at each cam angle, by Newton's method
-    (``d delta / d alpha = -chi`` exactly, the envelope theorem)."""
-    out = np.empty_like(thetas)
-    a = alpha_start
-    for i in range(thetas.size):
-        for _ in range(60):
-            delta, chi, rho_c, xc, yc = contact_point(a, thetas[i], p)
-            step = delta / chi
-            a += step
-            if abs(step) < 1e-15:
-                break
-        out[i] = a
-    return out
 
 
 @numba.njit(cache=True)
@@ -107,7 +90,7 @@ def _angles(system: System, points: int) -> tuple[np.ndarray, np.ndarray, np.nda
     p = L.pack(system, initial_angle=0.0)
     thetas = 2.0 * np.pi * np.arange(points) / points
     start = _touch_angle(p, 0.0)
-    alpha = _rigid_angles(thetas, p, start)
+    alpha = rigid_angles(thetas, p, start)
     delta = np.array([contact_point(a, th, p)[0] for a, th in zip(alpha[::max(1, points // 64)],
                                                                    thetas[::max(1, points // 64)])])
     if not np.all(np.abs(delta) < 1e-12):

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 import numba
+import numpy as np
 
 from camdyn.core import systems
 from camdyn.core.tableaus import (
@@ -65,14 +66,10 @@ def dense(tau, h, y0, f0, y1, f1, work, kind, out):
         hermite(tau, h, y0, f0, y1, f1, out)
         return
     if kind == KIND_DOP853:
-        for i in range(N):
-            acc = 0.0
-            for j in range(6, -1, -1):   # nested form: ((F6 x + F5)(1 - x) + F4) x ...
-                acc += work[j, i]
-                if (6 - j) % 2 == 0:
-                    acc *= tau
-                else:
-                    acc *= 1.0 - tau
+        s = 1.0 - tau
+        for i in range(N):   # nested form: ((F6 x + F5)(1 - x) + F4) x ...
+            acc = ((((((work[6, i] * tau + work[5, i]) * s + work[4, i]) * tau + work[3, i]) * s
+                      + work[2, i]) * tau + work[1, i]) * s + work[0, i]) * tau
             out[i] = y0[i] + acc
         return
     t2 = tau * tau
@@ -137,14 +134,14 @@ def rosenbrock_step(system, t, y, f0, h, mode, p, work, stages, y1, err):
     """Linearly implicit RODAS4 step.
 
     The Jacobian comes from the system (:func:`camdyn.core.systems.jacobian`), the time
-    derivative of the right-hand side from a forward difference. ``work`` is a (5, 3) and ``stages`` a (6, 3) scratch array. Returns the
-    number of right-hand-side calls.
+    derivative of the right-hand side from a forward difference. ``work`` is a (4, 3) and
+    ``stages`` a (6, 3) scratch array. Returns the number of right-hand-side calls.
     """
     yt = work[0]
     fe = work[1]
     dfdt = work[2]
     r = work[3]
-    jac = work[4]
+    jac = np.empty(4)   # four entries: a row of work would be one short
     systems.jacobian(system, t, y, f0, mode, p, jac)
     j10 = jac[0]
     j11 = jac[1]

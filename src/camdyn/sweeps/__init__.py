@@ -3,10 +3,22 @@ checkpoints, and the result as an xarray Dataset over the swept dimensions.
 
 >>> from camdyn.sweeps import load_spec, run_sweep
 >>> ds = run_sweep(load_spec("bifurcation.toml"))          # doctest: +SKIP
+
+The names below are loaded on first use, so that a worker process, which imports only
+:mod:`camdyn.sweeps.worker`, starts without xarray, pint or SciPy's optimizers.
 """
 
-from camdyn.sweeps.execution import compute_chunk, default_workers, run_sweep
-from camdyn.sweeps.spec import METRICS, SweepSpec, Vary, load_spec, spec_from_dict
+_EXECUTION = ("compute_chunk", "default_workers", "run_sweep")
+_SPEC = ("METRICS", "SweepSpec", "Vary", "load_spec", "spec_from_dict")
 
-__all__ = ["METRICS", "SweepSpec", "Vary", "load_spec", "spec_from_dict", "run_sweep", "compute_chunk",
-           "default_workers"]
+__all__ = [*_SPEC, "run_sweep", "compute_chunk", "default_workers"]
+
+
+def __getattr__(name):
+    if name in _EXECUTION:
+        from camdyn.sweeps import execution
+        return getattr(execution, name)
+    if name in _SPEC:
+        from camdyn.sweeps import spec
+        return getattr(spec, name)
+    raise AttributeError(name)

@@ -6,6 +6,9 @@ checkpoint per finished chunk.
   processes (default: every core), started with ``spawn`` (numba's threads do not
   survive ``fork``); each loads the compiled kernel from numba's on-disk cache once (the
   first run on a machine compiles it, about 10 s; numba writes its cache atomically).
+  The parent prepares every point (configuration, static equilibrium) and the workers
+  run only :mod:`camdyn.sweeps.worker`, which imports no pint, xarray or configuration
+  code, so they start in about half a second.
 - Dask: ``dask="local"`` starts a ``LocalCluster`` of ``workers`` single-threaded worker
   processes; ``dask="tcp://HOST:PORT"`` connects to a running scheduler (for example one
   started by dask-jobqueue on an HPC system, see docs/sweeps.md). The client's executor
@@ -26,7 +29,6 @@ import contextlib
 import multiprocessing
 import os
 
-import numba
 import numpy as np
 import xarray as xr
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, \
@@ -36,12 +38,11 @@ from camdyn.core import driver
 from camdyn.errors import CamdynError, ParameterError, SimulationError
 from camdyn.model.layout import SIZE
 from camdyn.simulation import penetration_resolution, prepare
-from camdyn.sweeps import kernel
-from camdyn.sweeps import metrics as M
+from camdyn.sweeps import worker
 from camdyn.sweeps.spec import SweepSpec
 from camdyn.sweeps.store import Checkpoint
 
-__all__ = ["compute_chunk", "run_sweep", "default_workers"]
+__all__ = ["compute_chunk", "prepare_chunk", "run_sweep", "default_workers"]
 
 STATUS_OK, STATUS_REFUSED, STATUS_SOLVER = 0, 1, 2
 MAX_STEPS_PER_REVOLUTION = 200_000
@@ -55,19 +56,16 @@ def default_workers() -> int:
         return os.cpu_count() or 1
 
 
-def _warm_worker(threads: int = 1) -> None:
-    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
-    kernel.warm()
+def prepare_chunk(spec: SweepSpec, chunk: int) -> dict:
+    """Parameter vectors, initial states and cam periods of chunk ``chunk`` (in the parent).
 
-
-def compute_chunk(spec: SweepSpec, chunk: int, threads: int = 1) -> dict:
-    """Simulate chunk ``chunk`` of ``spec`` and return its metric and bookkeeping arrays."""
-    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    A point that cannot be prepared (impossible geometry, no equilibrium, speed 0) is
+    marked refused with its reason and skipped by the kernel (NaN period).
+    """
     start = chunk * spec.chunk
-    stop = min(start + spec.chunk, spec.points)
-    n = stop - start
+    n = min(start + spec.chunk, spec.points) - start
     base = spec.base_system()
-    params = None                           # sized from the first prepared point
+    params = np.zeros((n, SIZE))
     starts = np.zeros((n, 3))
     periods = np.full(n, np.nan)
     status = np.zeros(n, dtype=np.int8)
@@ -82,42 +80,62 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int = 1) -> dict:
             status[i] = STATUS_REFUSED
             failure[i] = f"{type(exc).__name__}: {exc}"
             continue
-        if params is None:
-            params = np.zeros((n, prep.p.size))
         params[i] = prep.p
         starts[i] = prep.y0
         periods[i] = period
-    if params is None:                      # every point refused
-        params = np.zeros((n, SIZE))
-    window, onsets, impact_force, counters = kernel.simulate_points(
-        params, starts, periods, spec.revolutions, spec.discard, spec.samples_per_revolution, spec.rtol,
-        spec.atol, MAX_STEPS_PER_REVOLUTION * spec.revolutions)
-    solver = counters[:, driver.COUNT_STATUS]
-    for i in range(n):
+    return {"params": params, "starts": starts, "periods": periods, "status": status, "failure": failure}
+
+
+def _run_args(spec: SweepSpec, prepared: dict, threads: int) -> tuple:
+    """Arguments of :func:`camdyn.sweeps.worker.run_chunk` (arrays and plain values only:
+    a worker unpickles them without importing the spec or configuration code)."""
+    run = (spec.revolutions, spec.discard, spec.samples_per_revolution, spec.rtol, spec.atol,
+           MAX_STEPS_PER_REVOLUTION * spec.revolutions)
+    return (prepared["params"], prepared["starts"], prepared["periods"], prepared["status"] == STATUS_OK, run,
+            tuple(spec.metrics), spec.harmonics, threads)
+
+
+def _finish(prepared: dict, result: dict) -> dict:
+    """Merge a worker's result with the chunk's preparation: status and failure reason."""
+    status = prepared["status"].copy()
+    failure = list(prepared["failure"])
+    solver = result.pop("solver_status")
+    for i in range(status.size):
         if status[i] == STATUS_OK and solver[i] != driver.STATUS_OK:
             status[i] = STATUS_SOLVER
             failure[i] = f"SimulationError: {driver.STATUS_MESSAGES[int(solver[i])]}"
-    ok = status == STATUS_OK
-    out = M.compute(window, onsets, impact_force, periods, ok, spec.metrics, spec.harmonics,
-                    spec.samples_per_revolution)
-    out["status"] = status
-    out["failure"] = np.array(failure, dtype=str)
-    out["accepted_steps"] = counters[:, driver.COUNT_ACCEPTED]
-    out["rejected_steps"] = counters[:, driver.COUNT_REJECTED]
-    out["events"] = counters[:, driver.COUNT_EVENTS]
-    return out
+    result["status"] = status
+    result["failure"] = np.array(failure, dtype=str)
+    return result
+
+
+def compute_chunk(spec: SweepSpec, chunk: int, threads: int = 1) -> dict:
+    """Simulate chunk ``chunk`` of ``spec`` in this process and return its metric and
+    bookkeeping arrays (what a worker computes, merged with the preparation)."""
+    prepared = prepare_chunk(spec, chunk)
+    return _finish(prepared, worker.run_chunk(*_run_args(spec, prepared, threads)))
+
+
+def _warm_point(spec: SweepSpec):
+    """``(p, y0, period)`` of the base system for warming workers, or None."""
+    try:
+        prep = prepare(spec.base_system())
+    except (CamdynError, ValueError, ArithmeticError):
+        return None
+    period = prep.system.motion.period
+    return (prep.p, prep.y0, period) if np.isfinite(period) else None
 
 
 @contextlib.contextmanager
-def _executor(workers: int, dask: str | None, threads: int):
+def _executor(workers: int, dask: str | None, threads: int, point):
     """Yield ``(executor or None, number of workers, description)``."""
     if dask is None:
         if workers == 0:
             yield None, 1, f"inline, {threads} thread(s)"
             return
         ctx = multiprocessing.get_context("spawn")
-        with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_warm_worker,
-                                    initargs=(threads,)) as pool:
+        with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=worker.start_local,
+                                    initargs=(threads, point)) as pool:
             yield pool, workers, f"{workers} local worker process(es)"
         return
     try:
@@ -134,7 +152,7 @@ def _executor(workers: int, dask: str | None, threads: int):
                 client = stack.enter_context(Client(dask, timeout="20s"))
             except (OSError, TimeoutError) as exc:
                 raise ParameterError(f"cannot reach the Dask scheduler at {dask!r} ({exc})") from None
-        client.run(_warm_worker, threads)
+        client.run(worker.warm, threads, point)
         n = len(client.scheduler_info()["workers"])
         yield client.get_executor(), max(n, 1), f"Dask at {client.scheduler.address} ({n} workers)"
 
@@ -195,7 +213,7 @@ def run_sweep(spec: SweepSpec, workers: int | None = None, dask: str | None = No
     if todo:
         columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
                    TextColumn("points"), TimeElapsedColumn(), TimeRemainingColumn())
-        with Progress(*columns, disable=not progress) as bar, _executor(workers, dask, threads) as (pool, n, how):
+        with Progress(*columns, disable=not progress) as bar, _executor(workers, dask, threads, _warm_point(spec)) as (pool, n, how):
             say(f"{spec.points} points in {spec.chunks} chunks of {spec.chunk} on {how}")
             task = bar.add_task(spec.name, total=spec.points,
                                 completed=sum(_chunk_size(spec, c) for c in done))
@@ -214,16 +232,19 @@ def _chunk_size(spec: SweepSpec, chunk: int) -> int:
 
 
 def _drain(pool, n_workers, spec, todo, threads, store, advance) -> None:
+    """Keep at most two chunks per worker in flight; the parent prepares each chunk just
+    before it is submitted and saves each result as it arrives."""
     queue = list(reversed(todo))
     pending = {}
     try:
         while queue or pending:
             while queue and len(pending) < 2 * n_workers:
                 c = queue.pop()
-                pending[pool.submit(compute_chunk, spec, c, threads)] = c
+                prepared = prepare_chunk(spec, c)
+                pending[pool.submit(worker.run_chunk, *_run_args(spec, prepared, threads))] = (c, prepared)
             finished, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
             for fut in finished:
-                c = pending.pop(fut)
+                c, prepared = pending.pop(fut)
                 try:
                     result = fut.result()
                 except CamdynError:
@@ -231,7 +252,7 @@ def _drain(pool, n_workers, spec, todo, threads, store, advance) -> None:
                 except Exception as exc:  # a worker died or the code failed: keep what is done
                     raise SimulationError(f"chunk {c} failed on its worker ({type(exc).__name__}: {exc}); "
                                           f"finished chunks are kept, rerun to resume") from exc
-                store.save(c, result)
+                store.save(c, _finish(prepared, result))
                 advance(c)
     finally:
         for fut in pending:

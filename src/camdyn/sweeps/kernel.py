@@ -13,8 +13,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from camdyn.analysis.kinematics import _rigid_angles
 from camdyn.core import driver, systems
+from camdyn.geometry import rigid_angles
 from camdyn.model.outputs import derived
 
 #: channels of the window, in the order of the kernel's ``window`` output
@@ -81,7 +81,7 @@ def simulate_points(params, starts, periods, revolutions, discard, samples, rtol
             continue
         chans = derived(t_out, y, modes, p)
         thetas = chans[:, 12]
-        rigid = _rigid_angles(thetas, p, starts[i, 0])
+        rigid = rigid_angles(thetas, p, starts[i, 0])
         for k in range(m):
             window[i, 0, k] = y[k, 0]
             window[i, 1, k] = y[k, 1]
@@ -101,14 +101,4 @@ def simulate_points(params, starts, periods, revolutions, discard, samples, rtol
     return window, onsets, impact_force, counters
 
 
-def warm() -> None:
-    """Load (or compile, the first time) the kernel, on one tiny batch."""
-    from camdyn.config import load_system
-    from camdyn.simulation import prepare
-
-    prep = prepare(load_system("sundar2014-impact"))
-    simulate_points(prep.p[None, :].copy(), prep.y0[None, :].copy(), np.array([prep.system.motion.period]),
-                    2, 1, 8, 1e-6, 1e-9, 10 ** 6)
-
-
-__all__ = ["WINDOW", "simulate_points", "warm"]
+__all__ = ["WINDOW", "simulate_points"]
