@@ -78,13 +78,13 @@ def test_sweep_warns_when_the_tolerance_cannot_resolve_the_penetration():
     """The impacting stand-in rests on 0.4 nm of penetration: rtol = 3e-7 allows an error
     of 1.8 times that (the solver's error opened the contact in a 10 x 23 map); 1e-9 does not."""
     from camdyn.sweeps import spec_from_dict
-    from camdyn.sweeps.execution import _check_resolution
+    from camdyn.sweeps.execution import _check_resolution, _prepare_base
 
     def warnings(source, rtol, atol):
         spec = spec_from_dict({"system": {"source": source}, "vary": [{"key": "motion.speed", "values": [1.0]}],
                                "run": {"rtol": rtol, "atol": atol}, "output": {"path": "w.nc"}})
         said = []
-        _check_resolution(spec, said.append)
+        _check_resolution(spec, _prepare_base(spec), said.append)
         return said
 
     loose = warnings("alzate2007-standin-impacting", 3e-7, 1e-10)

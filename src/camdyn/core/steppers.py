@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 
 import numba
-import numpy as np
 
 from camdyn.core import systems
 from camdyn.core.tableaus import (
@@ -134,14 +133,14 @@ def rosenbrock_step(system, t, y, f0, h, mode, p, work, stages, y1, err):
     """Linearly implicit RODAS4 step.
 
     The Jacobian comes from the system (:func:`camdyn.core.systems.jacobian`), the time
-    derivative of the right-hand side from a forward difference. ``work`` is a (4, 3) and
-    ``stages`` a (6, 3) scratch array. Returns the number of right-hand-side calls.
+    derivative of the right-hand side from a forward difference. ``work`` and ``stages``
+    are (6, 3) scratch arrays. Returns the number of right-hand-side calls.
     """
     yt = work[0]
     fe = work[1]
     dfdt = work[2]
     r = work[3]
-    jac = np.empty(4)   # four entries: a row of work would be one short
+    jac = work[4:6].reshape(6)   # the Jacobian's four entries: one row of work is one short
     systems.jacobian(system, t, y, f0, mode, p, jac)
     j10 = jac[0]
     j11 = jac[1]

@@ -116,14 +116,11 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int = 1) -> dict:
     return _finish(prepared, worker.run_chunk(*_run_args(spec, prepared, threads)))
 
 
-def _warm_point(spec: SweepSpec):
-    """``(p, y0, period)`` of the base system for warming workers, or None."""
-    try:
-        prep = prepare(spec.base_system())
-    except (CamdynError, ValueError, ArithmeticError):
+def _warm_point(base):
+    """``(p, y0, period)`` of the prepared base system for warming workers, or None."""
+    if base is None or not np.isfinite(base.system.motion.period):
         return None
-    period = prep.system.motion.period
-    return (prep.p, prep.y0, period) if np.isfinite(period) else None
+    return base.p, base.y0, base.system.motion.period
 
 
 @contextlib.contextmanager
@@ -157,12 +154,20 @@ def _executor(workers: int, dask: str | None, threads: int, point):
         yield client.get_executor(), max(n, 1), f"Dask at {client.scheduler.address} ({n} workers)"
 
 
-def _check_resolution(spec: SweepSpec, say) -> None:
-    """Warn when the tolerances cannot resolve the base system's static penetration."""
+def _prepare_base(spec: SweepSpec):
+    """The base system made ready for the kernel, or None where it cannot be (its points
+    are then refused one by one, with their reasons)."""
     try:
-        ratio = penetration_resolution(prepare(spec.base_system()), spec.rtol, spec.atol)
+        return prepare(spec.base_system())
     except CamdynError:
+        return None
+
+
+def _check_resolution(spec: SweepSpec, base, say) -> None:
+    """Warn when the tolerances cannot resolve the base system's static penetration."""
+    if base is None:
         return
+    ratio = penetration_resolution(base, spec.rtol, spec.atol)
     if ratio > 0.1:
         say(f"warning: rtol = {spec.rtol:g}, atol = {spec.atol:g} allow an error of {ratio:.2g} times the static "
             f"penetration, so the solver's own error may open the contact (spurious impacts); set [run] rtol "
@@ -207,13 +212,15 @@ def run_sweep(spec: SweepSpec, workers: int | None = None, dask: str | None = No
     store = Checkpoint(spec, restart=restart)
     done = store.done()
     todo = [c for c in range(spec.chunks) if c not in done]
-    _check_resolution(spec, say)
+    base = _prepare_base(spec)
+    _check_resolution(spec, base, say)
     if done:
         say(f"resuming: {len(done)} of {spec.chunks} chunks already on disk in {store.folder}")
     if todo:
         columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
                    TextColumn("points"), TimeElapsedColumn(), TimeRemainingColumn())
-        with Progress(*columns, disable=not progress) as bar, _executor(workers, dask, threads, _warm_point(spec)) as (pool, n, how):
+        with Progress(*columns, disable=not progress) as bar, \
+                _executor(workers, dask, threads, _warm_point(base)) as (pool, n, how):
             say(f"{spec.points} points in {spec.chunks} chunks of {spec.chunk} on {how}")
             task = bar.add_task(spec.name, total=spec.points,
                                 completed=sum(_chunk_size(spec, c) for c in done))

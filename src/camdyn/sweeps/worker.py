@@ -15,6 +15,7 @@ import os
 import numba
 import numpy as np
 
+from camdyn.core import driver
 from camdyn.sweeps import kernel
 from camdyn.sweeps import metrics as M
 
@@ -82,11 +83,11 @@ def run_chunk(params: np.ndarray, starts: np.ndarray, periods: np.ndarray, ok: n
     revolutions, discard, samples, rtol, atol, max_steps = run
     window, onsets, impact_force, counters = kernel.simulate_points(
         params, starts, periods, revolutions, discard, samples, rtol, atol, max_steps)
-    solver = counters[:, kernel.driver.COUNT_STATUS]
-    good = ok & (solver == kernel.driver.STATUS_OK)
+    solver = counters[:, driver.COUNT_STATUS]
+    good = ok & (solver == driver.STATUS_OK)
     out = M.compute(window, onsets, impact_force, periods, good, metrics, harmonics, samples)
     out["solver_status"] = solver
-    out["accepted_steps"] = counters[:, kernel.driver.COUNT_ACCEPTED]
-    out["rejected_steps"] = counters[:, kernel.driver.COUNT_REJECTED]
-    out["events"] = counters[:, kernel.driver.COUNT_EVENTS]
+    out["accepted_steps"] = counters[:, driver.COUNT_ACCEPTED]
+    out["rejected_steps"] = counters[:, driver.COUNT_REJECTED]
+    out["events"] = counters[:, driver.COUNT_EVENTS]
     return out
