@@ -11,7 +11,9 @@ import camdyn
 from camdyn.contact import (
     equivalent_radius, hertz_line_coefficient, hertz_point_coefficient, hunt_crossley_beta,
 )
-from camdyn.geometry import cam_angle, contact_kinematics, contact_point, contact_point_rate
+from camdyn.geometry import (
+    cam_acceleration, cam_angle, contact_kinematics, contact_point, contact_point_rate, contact_rates_trig,
+)
 from camdyn.model import layout as L
 from camdyn.model.dynamics import evaluate
 
@@ -64,6 +66,38 @@ def test_rates_match_finite_differences(alpha, alpha_dot, t, ratio):
     assert delta_dot == pytest.approx((dp[0] - dm[0]) / (2 * h), rel=1e-6, abs=1e-10)
     chi_dot = contact_point_rate(a0, alpha_dot, th0, thd0, p)
     assert chi_dot == pytest.approx((dp[1] - dm[1]) / (2 * h), rel=1e-5, abs=1e-8)
+
+
+@settings(max_examples=30, deadline=None)
+@given(alpha=st.floats(0.0, 0.15), alpha_dot=st.floats(-5, 5), alpha_ddot=st.floats(-3e3, 3e3),
+       t=st.floats(0, 0.1), ratio=st.floats(0.7, 1.0), oscillating=st.booleans())
+def test_guard_rates_match_finite_differences(alpha, alpha_dot, alpha_ddot, t, ratio, oscillating):
+    """The event core's exact guard rates (sliding velocity and penetration rate) against
+    central differences of contact_kinematics along alpha(t) = a0 + a1 t + a2 t^2 / 2."""
+    extra = {"motion.kind": "oscillating", "motion.amplitude": "40 deg", "motion.frequency": "7 Hz"} \
+        if oscillating else {}
+    s = camdyn.load_system("sundar2014-friction", {"cam.semi_minor": f"{17.5 * ratio} mm", **extra})
+    p = L.pack(s, initial_angle=0.3)
+    h = 1e-6
+
+    def kinematics(tt):
+        d = tt - t
+        th, thd = cam_angle(tt, p)
+        return contact_kinematics(alpha + alpha_dot * d + 0.5 * alpha_ddot * d * d, alpha_dot + alpha_ddot * d,
+                                  th, thd, p)
+
+    th0, thd0 = cam_angle(t, p)
+    thdd0 = cam_acceleration(t, p)
+    assert thdd0 == pytest.approx((cam_angle(t + h, p)[1] - cam_angle(t - h, p)[1]) / (2 * h), rel=1e-6, abs=1e-6)
+    delta, vr, delta_dot, vr_dot, delta_ddot = contact_rates_trig(
+        math.cos(alpha), math.sin(alpha), math.cos(th0), math.sin(th0), alpha_dot, alpha_ddot, thd0, thdd0, p)
+    k0, kp, km = kinematics(t), kinematics(t + h), kinematics(t - h)
+    assert (delta, vr, delta_dot) == pytest.approx((k0[0], k0[4], k0[1]), rel=1e-12, abs=1e-15)
+    assert vr_dot == pytest.approx((kp[4] - km[4]) / (2 * h), rel=1e-5, abs=1e-6)
+    assert delta_ddot == pytest.approx((kp[1] - km[1]) / (2 * h), rel=1e-5, abs=1e-6)
+    unknown = contact_rates_trig(math.cos(alpha), math.sin(alpha), math.cos(th0), math.sin(th0), alpha_dot,
+                                 math.nan, thd0, thdd0, p)
+    assert math.isnan(unknown[3]) and math.isnan(unknown[4]) and unknown[:3] == (delta, vr, delta_dot)
 
 
 def test_curvature_of_circle_and_ellipse():

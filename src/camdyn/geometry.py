@@ -21,7 +21,8 @@ import numpy as np
 from camdyn.errors import GeometryError
 from camdyn.model import layout as L
 
-__all__ = ["cam_angle", "contact_kinematics", "contact_point", "zero_state", "contact_point_rate", "rigid_angles"]
+__all__ = ["cam_angle", "cam_acceleration", "contact_kinematics", "contact_point", "zero_state", "contact_point_rate",
+           "contact_rates_trig", "rigid_angles"]
 
 
 @numba.njit(cache=True)
@@ -36,6 +37,15 @@ def cam_angle(t, p):
     half = 0.5 * p[L.SWING]
     w = p[L.OMEGA_C]
     return p[L.THETA0] + half * math.sin(w * t), half * w * math.cos(w * t)
+
+
+@numba.njit(cache=True)
+def cam_acceleration(t, p):
+    """Cam angular acceleration ``Theta_ddot`` [rad/s^2] at time ``t`` [s]."""
+    if p[L.MOTION_KIND] == 0.0:
+        return 0.0
+    w = p[L.OMEGA_C]
+    return -0.5 * p[L.SWING] * w * w * math.sin(w * t)
 
 
 @numba.njit(cache=True)
@@ -122,38 +132,59 @@ def contact_point_rate(alpha, alpha_dot, theta, theta_dot, p):
 
     The follower's surface moves relative to the contact point at ``u_b = -chi_dot``;
     the cam's at ``u_c = vr + u_b``; the sum velocity is ``ve = u_c + u_b`` (eq 4.26).
+    See :func:`contact_rates_trig` for the closed form.
     """
     ca = math.cos(alpha)
     sa = math.sin(alpha)
     ct = math.cos(theta)
     st = math.sin(theta)
+    n1 = sa * ct + ca * st
+    n2 = -sa * st + ca * ct
+    a = p[L.SEMI_A]
+    b = p[L.SEMI_B]
+    s = math.sqrt(a * a * n1 * n1 + b * b * n2 * n2)
+    rho_c = a * a * b * b / (s * s * s)
+    n_e = sa * p[L.PIVOT_X] + ca * p[L.PIVOT_Y]
+    return -alpha_dot * n_e + (alpha_dot + theta_dot) * (p[L.RUNOUT] * n1 + s - rho_c)
+
+
+@numba.njit(cache=True)
+def contact_rates_trig(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_ddot, p):
+    """The guards of the compiled core and their exact time derivatives.
+
+    With ``phi = alpha + Theta``, the normal's cam-frame components are
+    ``n1 = sin(phi)``, ``n2 = cos(phi)``, and ``n . (Xc - E) = -(e n1 + s)``, so
+
+    - ``vr = Theta_dot w - alpha_dot h`` with ``w = e n1 + s``;
+    - ``chi_dot = -alpha_dot n.E + phi_dot (w - rho_c)`` (the support function's
+      identity ``(a^2 n2^2 + b^2 n1^2) s^2 - n1^2 n2^2 (a^2 - b^2)^2 = a^2 b^2``);
+    - ``delta_dot = -alpha_dot chi - Theta_dot (chi - u.E)``.
+
+    Returns
+    -------
+    tuple
+        ``(delta [m], vr [m/s], delta_dot [m/s], vr_dot [m/s^2], delta_ddot [m/s^2])``;
+        the rates are NaN when ``alpha_ddot`` is NaN (unknown).
+    """
+    delta, chi, rho_c, xc, yc = contact_point_trig(ca, sa, ct, st, p)
     a = p[L.SEMI_A]
     b = p[L.SEMI_B]
     e = p[L.RUNOUT]
-    gx = p[L.PIVOT_X] - e * ct
-    gy = p[L.PIVOT_Y] - e * st
     n1 = sa * ct + ca * st
     n2 = -sa * st + ca * ct
     s = math.sqrt(a * a * n1 * n1 + b * b * n2 * n2)
-    q1 = -a * a * n1 / s                    # Xc = Gc + q1 e1 + q2 e2
-    q2 = -b * b * n2 / s
-    ux, uy = ca, -sa
-    e1x, e1y = ct, st
-    e2x, e2y = -st, ct
-    n1_dot = alpha_dot * (ux * e1x + uy * e1y) + theta_dot * n2   # dn/dt = alpha_dot u
-    n2_dot = alpha_dot * (ux * e2x + uy * e2y) - theta_dot * n1   # de1/dt = Theta_dot e2
-    s_dot = (a * a * n1 * n1_dot + b * b * n2 * n2_dot) / s
-    q1_dot = -a * a * (n1_dot * s - n1 * s_dot) / (s * s)
-    q2_dot = -b * b * (n2_dot * s - n2 * s_dot) / (s * s)
-    xc = gx + q1 * e1x + q2 * e2x
-    yc = gy + q1 * e1y + q2 * e2y
-    # dXc/dt = dGc/dt + q1_dot e1 + q2_dot e2 + Theta_dot (q1 e2 - q2 e1)
-    gx_dot = e * theta_dot * st
-    gy_dot = -e * theta_dot * ct
-    xc_dot = gx_dot + q1_dot * e1x + q2_dot * e2x + theta_dot * (q1 * e2x - q2 * e1x)
-    yc_dot = gy_dot + q1_dot * e1y + q2_dot * e2y + theta_dot * (q1 * e2y - q2 * e1y)
-    # chi = u . Xc, du/dt = -alpha_dot n
-    return -alpha_dot * (sa * xc + ca * yc) + ux * xc_dot + uy * yc_dot
+    w = e * n1 + s
+    n_e = sa * p[L.PIVOT_X] + ca * p[L.PIVOT_Y]     # n . E
+    u_e = ca * p[L.PIVOT_X] - sa * p[L.PIVOT_Y]     # u . E
+    phi_dot = alpha_dot + theta_dot
+    vr = theta_dot * w - alpha_dot * p[L.OFFSET]
+    delta_dot = -alpha_dot * chi - theta_dot * (chi - u_e)
+    vr_dot = (theta_ddot * w + theta_dot * phi_dot * n2 * (e + n1 * (a * a - b * b) / s)
+              - alpha_ddot * p[L.OFFSET])
+    chi_dot = -alpha_dot * n_e + phi_dot * (w - rho_c)
+    delta_ddot = (-alpha_ddot * chi - phi_dot * chi_dot - theta_ddot * (chi - u_e)
+                  - theta_dot * alpha_dot * n_e)
+    return delta, vr, delta_dot, vr_dot, delta_ddot
 
 
 @numba.njit(cache=True)

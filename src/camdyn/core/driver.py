@@ -7,9 +7,10 @@ Algorithm (per accepted step from ``t`` to ``t + h``):
 2. build the step's continuous extension (Dormand-Prince's own 4th-order dense output,
    or the cubic Hermite interpolant after a Rosenbrock step);
 3. for every guard active in the current mode, look for a sign change against its
-   expected sign at the step end, the midpoint, and the extrema of the guard's own
-   cubic (from its exact rate, where the system supplies it; this catches grazing
-   contacts that begin and end inside one step);
+   expected sign at the step end and at the extrema of the guard's own cubic (from its
+   exact rates at both ends, which the system computes from the acceleration; this
+   catches grazing contacts that begin and end inside one step), or at the midpoint
+   for a guard whose rate is unknown;
 4. locate the earliest crossing by the Illinois method on the interpolant, cut the
    step there, log the event, switch mode and restart (the right-hand side is smooth
    within a mode, so no step straddles a discontinuity);
@@ -75,7 +76,7 @@ NG = systems.N_GUARDS
 @numba.njit(cache=True)
 def _guard_at(system, t, h, tau, y0, f0, y1, f1, work, kind, p, ytmp, vals, rates):
     dense(tau, h, y0, f0, y1, f1, work, kind, ytmp)
-    systems.guards(system, t + tau * h, ytmp, p, vals, rates)
+    systems.guards(system, t + tau * h, ytmp, math.nan, p, vals, rates)
 
 
 @numba.njit(cache=True)
@@ -196,7 +197,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     systems.initial_mode(system, t, y, p, mode)
     systems.rhs(system, t, y, mode, p, f)
     counters[COUNT_RHS] += 1
-    systems.guards(system, t, y, p, g, gr)
+    systems.guards(system, t, y, f[1], p, g, gr)
     i_out = 0
     while i_out < n_out and t_out[i_out] <= t:
         for i in range(3):
@@ -261,7 +262,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             counters[COUNT_RHS] += 1
         else:
             counters[COUNT_EXPLICIT] += 1
-        systems.guards(system, t + h, y1, p, g1, gr1)
+        systems.guards(system, t + h, y1, f1[1], p, g1, gr1)
         need_mid = False
         for k in range(NG):
             if systems.expected_sign(system, k, mode, p) != 0.0 and (math.isnan(gr[k]) or math.isnan(gr1[k])):
@@ -271,7 +272,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
                 counters[COUNT_RHS] += dop853_extend(system, t, y, h, y1, f1, mode, p, k16, ytmp, f7)
                 ready = True
             dense(0.5, h, y, f, y1, f1, dwork, kind, ymid)
-            systems.guards(system, t + 0.5 * h, ymid, p, gv, grv)
+            systems.guards(system, t + 0.5 * h, ymid, math.nan, p, gv, grv)
         else:
             for k in range(NG):
                 gv[k] = 0.0   # not used: every active guard has its cubic
@@ -351,7 +352,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             i_out = _sample(t, h, t_new, i_out, t_out, y, f, y1, f1, dwork, kind, mode, yo, y_out, mode_out)
             for i in range(3):
                 y[i] = ytmp[i]
-            systems.guards(system, t_new, y, p, g, gr)
+            systems.guards(system, t_new, y, math.nan, p, g, gr)
             monitor_max = max(monitor_max, systems.monitor(system, t_new, y, mode, p))
             if n_events < max_events:
                 ev = events[n_events]
@@ -381,6 +382,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             t = t_new
             systems.rhs(system, t, y, mode, p, f)
             counters[COUNT_RHS] += 1
+            systems.guards(system, t, y, f[1], p, g, gr)   # the rates in the new mode
             monitor_max = systems.monitor(system, t, y, mode, p)
             h = max(h * tau_event, h * 0.1) if tau_event > 0.0 else h
             # a contact is far faster than free flight: start from this regime's last step

@@ -3,8 +3,9 @@
 Each system provides, for a state ``y`` of 3 components and a mode vector:
 
 - ``rhs(t, y, mode, p, dydt)`` and ``jacobian(t, y, f0, mode, p, jac)``;
-- ``guards(t, y, p, values, rates)``: event functions and their time derivatives
-  (NaN where unknown); a guard crossing its expected sign is an event;
+- ``guards(t, y, accel, p, values, rates)``: event functions and their time derivatives
+  (NaN where unknown), given the acceleration ``accel = dy1/dt`` at ``(t, y)`` (NaN
+  when not known); a guard crossing its expected sign is an event;
 - ``expected_sign(k, mode, p)``: +1 or -1 for an active guard, 0 for an inactive one;
 - ``transition(k, t, y, values, mode, p)``: the new mode after guard ``k`` crossed;
 - ``preferred_method(mode, p)``: the stepper automatic selection uses;
@@ -58,12 +59,9 @@ def jacobian(system, t, y, f0, mode, p, jac):
 
 
 @numba.njit(cache=True)
-def guards(system, t, y, p, values, rates):
+def guards(system, t, y, accel, p, values, rates):
     if system == CAM_FOLLOWER:
-        dynamics.guards(t, y, p, values)
-        rates[0] = values[2]            # d(delta)/dt = delta_dot, exact
-        rates[1] = math.nan
-        rates[2] = math.nan
+        dynamics.guards(t, y, accel, p, values, rates)
     else:
         values[0] = y[0]
         rates[0] = y[1]
@@ -122,7 +120,7 @@ def transition(system, k, t, y, values, mode, p):
 def initial_mode(system, t, y, p, mode):
     values = mode.copy()
     rates = mode.copy()
-    guards(system, t, y, p, values, rates)
+    guards(system, t, y, math.nan, p, values, rates)
     if system == CAM_FOLLOWER:
         mode[L.MODE_CONTACT] = 1.0 if values[0] > 0.0 else 0.0
         mode[L.MODE_SLIP] = 1.0 if values[1] >= 0.0 else -1.0

@@ -20,7 +20,7 @@ import numba
 
 from camdyn.contact import contact_force
 from camdyn.friction import friction_coefficient
-from camdyn.geometry import cam_angle, contact_kinematics, contact_kinematics_trig
+from camdyn.geometry import cam_acceleration, cam_angle, contact_kinematics, contact_kinematics_trig, contact_rates_trig
 from camdyn.model import layout as L
 
 __all__ = ["spring_force", "spring_moment", "evaluate", "rhs", "guards"]
@@ -125,18 +125,26 @@ def rhs(t, y, mode, p, dydt):
 
 
 @numba.njit(cache=True)
-def guards(t, y, p, out):
-    """Event functions: ``out = (delta [m], vr [m/s], delta_dot [m/s])``.
+def guards(t, y, alpha_ddot, p, out, rates):
+    """Event functions ``out = (delta [m], vr [m/s], delta_dot [m/s])`` and their exact
+    time derivatives ``rates = (delta_dot [m/s], vr_dot [m/s^2], delta_ddot [m/s^2])``.
 
     ``delta`` changes sign at contact onset and separation, ``vr`` at a reversal of
     sliding (Coulomb friction), ``delta_dot`` at peak penetration (laws D and E switch
-    there; the impact table records the peak).
+    there; the impact table records the peak). ``alpha_ddot`` [rad/s^2] is the state's
+    acceleration (the right-hand side at ``(t, y)``), or NaN where it is not known,
+    which leaves the rates of ``vr`` and ``delta_dot`` NaN.
     """
     theta, theta_dot = cam_angle(t, p)
-    delta, delta_dot, chi, rho_c, vr, n_v, u_v = contact_kinematics(y[0], y[1], theta, theta_dot, p)
+    delta, vr, delta_dot, vr_dot, delta_ddot = contact_rates_trig(
+        math.cos(y[0]), math.sin(y[0]), math.cos(theta), math.sin(theta), y[1], alpha_ddot, theta_dot,
+        cam_acceleration(t, p), p)
     out[0] = delta
     out[1] = vr
     out[2] = delta_dot
+    rates[0] = delta_dot
+    rates[1] = vr_dot
+    rates[2] = delta_ddot
 
 
 @numba.njit(cache=True)
