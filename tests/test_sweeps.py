@@ -113,12 +113,18 @@ def test_kernel_agrees_with_simulate_and_its_impact_table(tmp_path):
 
 @pytest.mark.parametrize("runout", ["0.5 mm", "1.5 mm"])
 def test_regime_boundary_brackets_loss_of_contact_speed(tmp_path, runout):
-    """Contact is kept 0.5 % below the inverse-kinematics loss-of-contact speed and lost
-    (with impacts) 0.5 % above it."""
+    """Contact is kept 2-3 % below the inverse-kinematics loss-of-contact speed and lost
+    (with impacts) 0.5 % above it.
+
+    Closer below the boundary, the start from rest at the static equilibrium bounces
+    through a chaotic transient whose length is erratic: at 0.995 of the speed (0.5 mm)
+    it ended after 15 to more than 100 revolutions depending on the tolerance (rtol 1e-6
+    to 1e-10) and on round-off, so no fixed window decides there; at 0.98 it ends after
+    9-10 revolutions at every tolerance."""
     system = camdyn.load_system("sundar2014-impact", {"cam.runout": runout})
     v = loss_of_contact_speed(system)
     spec = spec_from_dict({"system": {"source": "sundar2014-impact", "set": {"cam.runout": runout}},
-                           "vary": [{"key": "motion.speed", "values": [f"{v * f} Hz" for f in (0.98, 0.995,
+                           "vary": [{"key": "motion.speed", "values": [f"{v * f} Hz" for f in (0.97, 0.98,
                                                                                               1.005, 1.02)]}],
                            "run": {"revolutions": 100, "discard": 60, "chunk": 4},
                            "metrics": {"names": ["regime", "impacts"]},

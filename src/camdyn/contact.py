@@ -42,7 +42,7 @@ def equivalent_radius(cam_radius, pin_radius):
     ``rd = 0`` (no pin: the cam on the bar face) gives the cam's radius alone (eq 2.34)."""
     if pin_radius == 0.0:
         return cam_radius
-    return 1.0 / (1.0 / cam_radius + 1.0 / pin_radius)
+    return cam_radius * pin_radius / (cam_radius + pin_radius)   # one division, not three
 
 
 def hertz_point_coefficient(modulus: float, radius: float) -> float:
@@ -95,7 +95,7 @@ def _factor(code, e):
     return 1.5 * (1.0 - e) / e
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def contact_force(delta, delta_dot, rho_c, approach, p):
     """Normal force on the follower [N] while in contact.
 

@@ -66,7 +66,7 @@ def contact_point(alpha, theta, p):
     return contact_point_trig(math.cos(alpha), math.sin(alpha), math.cos(theta), math.sin(theta), p)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def contact_point_trig(ca, sa, ct, st, p):
     """:func:`contact_point` from ``cos/sin`` of ``alpha`` and ``Theta`` (computed once by
     the right-hand side and shared with the spring and gravity terms)."""
@@ -113,7 +113,7 @@ def contact_kinematics(alpha, alpha_dot, theta, theta_dot, p):
                                    alpha_dot, theta_dot, p)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def contact_kinematics_trig(ca, sa, ct, st, alpha_dot, theta_dot, p):
     """:func:`contact_kinematics` from ``cos/sin`` of ``alpha`` and ``Theta``."""
     delta, chi, rho_c, xc, yc = contact_point_trig(ca, sa, ct, st, p)

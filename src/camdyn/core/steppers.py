@@ -18,7 +18,7 @@ from camdyn.core.tableaus import (
     DP_A61, DP_A62, DP_A63, DP_A64, DP_A65, DP_B1, DP_B3, DP_B4, DP_B5, DP_B6,
     DP_C2, DP_C3, DP_C4, DP_C5, DP_E1, DP_E3, DP_E4, DP_E5, DP_E6, DP_E7, DP_P,
     RB_A, RB_C, RB_CC, RB_G, RB_GAMMA, RB_M, RB_STAGES,
-    D8_A, D8_B, D8_C, D8_D, D8_E3, D8_E5, D8_STAGES,
+    D8_A, D8_A_FROM, D8_B, D8_B_FROM, D8_C, D8_D, D8_D_FROM, D8_E3, D8_E5, D8_STAGES,
 )
 
 N = 3  # state size
@@ -181,12 +181,23 @@ def rosenbrock_step(system, t, y, f0, h, mode, p, work, stages, y1, err):
 
 @numba.njit(cache=True)
 def _dop853_stage(system, t, y, h, s, mode, p, k, yt):
-    """Stage ``s`` of DOP853 (steps and continuous extension alike) into ``k[s]``."""
-    for i in range(N):
-        acc = 0.0
-        for j in range(s):
-            acc += D8_A[s, j] * k[j, i]
-        yt[i] = y[i] + h * acc
+    """Stage ``s`` of DOP853 (steps and continuous extension alike) into ``k[s]``.
+
+    The three components are summed side by side, over the row's nonzero columns only
+    (:data:`camdyn.core.tableaus.D8_A_FROM`).
+    """
+    c = D8_A[s, 0]
+    a0 = c * k[0, 0]
+    a1 = c * k[0, 1]
+    a2 = c * k[0, 2]
+    for j in range(D8_A_FROM[s], s):
+        c = D8_A[s, j]
+        a0 += c * k[j, 0]
+        a1 += c * k[j, 1]
+        a2 += c * k[j, 2]
+    yt[0] = y[0] + h * a0
+    yt[1] = y[1] + h * a1
+    yt[2] = y[2] + h * a2
     systems.rhs(system, t + D8_C[s] * h, yt, mode, p, k[s])
 
 
@@ -194,28 +205,44 @@ def _dop853_stage(system, t, y, h, s, mode, p, k, yt):
 def dop853_step(system, t, y, f0, h, mode, p, k, yt, y1, f1, err5, err3):
     """Explicit DOP853 step: 12 stages plus f(t + h, y1) into ``k[12]`` (``k`` is 16 x 3).
 
-    ``err5`` and ``err3`` receive the two embedded error estimates (without the factor h);
+    ``err5`` and ``err3`` receive the two embedded error estimates (without the factor h)
+    of the two dynamic components (the third, a quadrature, is not error-controlled);
     :func:`dop853_error_norm` combines them as Hairer's DOP853 does. ``yt`` is scratch.
     """
     for i in range(N):
         k[0, i] = f0[i]
     for s in range(1, D8_STAGES):
         _dop853_stage(system, t, y, h, s, mode, p, k, yt)
-    for i in range(N):
-        acc = 0.0
-        for j in range(D8_STAGES):
-            acc += D8_B[j] * k[j, i]
-        y1[i] = y[i] + h * acc
+    c = D8_B[0]
+    a0 = c * k[0, 0]
+    a1 = c * k[0, 1]
+    a2 = c * k[0, 2]
+    for j in range(D8_B_FROM, D8_STAGES):
+        c = D8_B[j]
+        a0 += c * k[j, 0]
+        a1 += c * k[j, 1]
+        a2 += c * k[j, 2]
+    y1[0] = y[0] + h * a0
+    y1[1] = y[1] + h * a1
+    y1[2] = y[2] + h * a2
     systems.rhs(system, t + h, y1, mode, p, f1)
     for i in range(N):
         k[D8_STAGES, i] = f1[i]
-        e5 = 0.0
-        e3 = 0.0
-        for j in range(D8_STAGES + 1):
-            e5 += D8_E5[j] * k[j, i]
-            e3 += D8_E3[j] * k[j, i]
-        err5[i] = e5
-        err3[i] = e3
+    e50 = D8_E5[0] * k[0, 0]
+    e51 = D8_E5[0] * k[0, 1]
+    e30 = D8_E3[0] * k[0, 0]
+    e31 = D8_E3[0] * k[0, 1]
+    for j in range(D8_B_FROM, D8_STAGES + 1):
+        e50 += D8_E5[j] * k[j, 0]
+        e51 += D8_E5[j] * k[j, 1]
+        e30 += D8_E3[j] * k[j, 0]
+        e31 += D8_E3[j] * k[j, 1]
+    err5[0] = e50
+    err5[1] = e51
+    err5[2] = 0.0
+    err3[0] = e30
+    err3[1] = e31
+    err3[2] = 0.0
     return D8_STAGES
 
 
@@ -246,8 +273,8 @@ def dop853_extend(system, t, y, h, y1, f1, mode, p, k, yt, out):
         out[1, i] = h * k[0, i] - dy
         out[2, i] = 2.0 * dy - h * (f1[i] + k[0, i])
         for r in range(4):
-            acc = 0.0
-            for j in range(16):
+            acc = D8_D[r, 0] * k[0, i]
+            for j in range(D8_D_FROM, 16):
                 acc += D8_D[r, j] * k[j, i]
             out[3 + r, i] = h * acc
     return 3

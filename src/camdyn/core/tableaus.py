@@ -75,6 +75,22 @@ D8_E3 = np.ascontiguousarray(_dop.E3, dtype=np.float64)  # (13,)
 D8_E5 = np.ascontiguousarray(_dop.E5, dtype=np.float64)  # (13,)
 D8_D = np.ascontiguousarray(_dop.D, dtype=np.float64)   # (4, 16)
 
+
+def _first_nonzero_after_column_0(rows: np.ndarray, ends) -> np.ndarray:
+    """Per row, the first column after 0 whose coefficient is nonzero (the row's end where
+    none is): DOP853's columns 1-4 are mostly zero, and skipping them adds only exact
+    zeros less, so the sums are bitwise the same."""
+    out = np.empty(rows.shape[0], dtype=np.int64)
+    for r in range(rows.shape[0]):
+        nz = [j for j in range(1, ends[r]) if rows[r, j] != 0.0]
+        out[r] = nz[0] if nz else ends[r]
+    return out
+
+
+D8_A_FROM = _first_nonzero_after_column_0(D8_A, range(16))      # stage s sums k[0], k[D8_A_FROM[s]:s]
+D8_B_FROM = int(_first_nonzero_after_column_0(np.vstack([D8_B, D8_E5[:12], D8_E3[:12]]), [12] * 3).min())
+D8_D_FROM = int(_first_nonzero_after_column_0(D8_D, [16] * 4).min())
+
 # RODAS4 [2]: 6-stage, order 4(3), L-stable and stiffly accurate Rosenbrock method, in
 # the form
 #   (I/(gamma h) - J) K_i = f(t + c_i h, y + sum_j A_ij K_j) + sum_j C_ij K_j / h + h g_i df/dt

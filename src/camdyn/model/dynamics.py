@@ -108,20 +108,28 @@ def evaluate_shifted(t, alpha, alpha_dot, mode, p, delta_shift):
 
 @numba.njit(cache=True)
 def rhs(t, y, mode, p, dydt):
-    """Right-hand side ``dy/dt`` of the state ``(alpha, alpha_dot, W_cam)``."""
+    """Right-hand side ``dy/dt`` of the state ``(alpha, alpha_dot, W_cam)``.
+
+    The same forces as :func:`evaluate`, computed directly: only the acceleration and
+    the cam's power leave this function, so the compiled helpers fold into one body.
+    """
     alpha = y[0]
+    ca = math.cos(alpha)
+    sa = math.sin(alpha)
+    fs = spring_force_trig(ca, sa, p)
+    moment = p[L.MASS] * p[L.GRAVITY] * p[L.CG] * ca + spring_moment_trig(ca, sa, fs, p)
+    power = 0.0
     if mode[L.MODE_CONTACT] > 0.5:
-        res = evaluate(t, alpha, y[1], mode, p)
-        dydt[1] = res[0]
-        dydt[2] = res[10]
-    else:  # free flight: no geometry needed
-        ca = math.cos(alpha)
-        sa = math.sin(alpha)
-        fs = spring_force_trig(ca, sa, p)
-        m = p[L.MASS] * p[L.GRAVITY] * p[L.CG] * ca + spring_moment_trig(ca, sa, fs, p)
-        dydt[1] = m / p[L.INERTIA]
-        dydt[2] = 0.0
+        theta, theta_dot = cam_angle(t, p)
+        delta, delta_dot, chi, rho_c, vr, n_v, u_v = contact_kinematics_trig(
+            ca, sa, math.cos(theta), math.sin(theta), y[1], theta_dot, p)
+        fn, fk = contact_force(delta, delta_dot, rho_c, mode[L.MODE_APPROACH], p)
+        ff = friction_coefficient(vr, mode[L.MODE_SLIP], p) * fn
+        moment += fn * chi + ff * p[L.OFFSET]
+        power = -fn * n_v + ff * u_v
     dydt[0] = y[1]
+    dydt[1] = moment / p[L.INERTIA]
+    dydt[2] = power
 
 
 @numba.njit(cache=True)
