@@ -27,6 +27,9 @@ from camdyn.sweeps.spec import METRICS, SweepSpec
 
 __all__ = ["Checkpoint", "SOLVER_VARIABLES"]
 
+#: memory for the parts joined into one write of the result file [bytes]
+BLOCK_BYTES = 32 * 2 ** 20
+
 #: per-point bookkeeping kept whatever the metrics
 SOLVER_VARIABLES = {
     "status": ("i1", "1", "0 ok, 1 parameters refused, 2 solver stopped"),
@@ -101,16 +104,30 @@ class Checkpoint:
                 reg = variables["regime"]
                 reg.attrs["flag_values"] = np.array(sorted(M.REGIMES), dtype=np.int8)
                 reg.attrs["flag_meanings"] = " ".join(M.REGIMES[k] for k in sorted(M.REGIMES))
-            for chunk in range(spec.chunks):
-                part = self.load(chunk)
-                start = chunk * spec.chunk
+            for start, block in self._blocks():
                 for name, var in variables.items():
-                    _write_rows(var, part[name], start, spec.shape)
+                    _write_rows(var, block[name], start, spec.shape)
             f.attrs.update(_global_attributes(spec))
         os.replace(tmp, out)
         if not keep_parts:
             shutil.rmtree(self.folder, ignore_errors=True)
         return out
+
+
+    def _blocks(self):
+        """Consecutive parts joined into blocks of at most :data:`BLOCK_BYTES` (at least one
+        part each): ``(first point, arrays)``. Each write into the netCDF file costs about
+        a millisecond whatever its size, so writing blocks instead of parts keeps the
+        assembly of a sweep of many small chunks from taking seconds."""
+        parts, size, first = [], 0, 0
+        for chunk in range(self.spec.chunks):
+            part = self.load(chunk)
+            parts.append(part)
+            size += sum(a.nbytes for a in part.values())
+            if size >= BLOCK_BYTES or chunk == self.spec.chunks - 1:
+                yield first, {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+                first = (chunk + 1) * self.spec.chunk
+                parts, size = [], 0
 
 
 def _atomic_text(path: Path, text: str) -> None:
