@@ -148,7 +148,7 @@ def contact_point_rate(alpha, alpha_dot, theta, theta_dot, p):
     return -alpha_dot * n_e + (alpha_dot + theta_dot) * (p[L.RUNOUT] * n1 + s - rho_c)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def contact_rates_trig(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_ddot, p):
     """The guards of the compiled core and their exact time derivatives.
 

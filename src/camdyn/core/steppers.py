@@ -198,7 +198,7 @@ def _dop853_stage(system, t, y, h, s, mode, p, k, yt):
     yt[0] = y[0] + h * a0
     yt[1] = y[1] + h * a1
     yt[2] = y[2] + h * a2
-    systems.rhs(system, t + D8_C[s] * h, yt, mode, p, k[s])
+    systems.rhs_inline(system, t + D8_C[s] * h, yt, mode, p, k[s])
 
 
 @numba.njit(cache=True)
@@ -225,7 +225,7 @@ def dop853_step(system, t, y, f0, h, mode, p, k, yt, y1, f1, err5, err3):
     y1[0] = y[0] + h * a0
     y1[1] = y[1] + h * a1
     y1[2] = y[2] + h * a2
-    systems.rhs(system, t + h, y1, mode, p, f1)
+    systems.rhs_inline(system, t + h, y1, mode, p, f1)
     for i in range(N):
         k[D8_STAGES, i] = f1[i]
     e50 = D8_E5[0] * k[0, 0]

@@ -45,6 +45,18 @@ def rhs(system, t, y, mode, p, dydt):
         _osc_rhs(t, y, p, dydt)
 
 
+@numba.njit(cache=True, inline="always")
+def rhs_inline(system, t, y, mode, p, dydt):
+    """:func:`rhs` compiled into its caller (numba IR inlining). DOP853's stages use it:
+    it saves a call and the reference counting of its array arguments per evaluation,
+    about a fifth of a DOP853 step; the other callers keep the call, which compiles
+    faster."""
+    if system == CAM_FOLLOWER:
+        dynamics.rhs(t, y, mode, p, dydt)
+    else:
+        _osc_rhs(t, y, p, dydt)
+
+
 @numba.njit(cache=True)
 def jacobian(system, t, y, f0, mode, p, jac):
     """``jac = (d f1/d y0, d f1/d y1, d f2/d y0, d f2/d y1)``; row 0 is (0, 1, 0) by form."""

@@ -106,7 +106,7 @@ def evaluate_shifted(t, alpha, alpha_dot, mode, p, delta_shift):
     return (moment / p[L.INERTIA], fn, ff, fs, chi, delta, delta_dot, vr, theta, theta_dot, power, fk)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def rhs(t, y, mode, p, dydt):
     """Right-hand side ``dy/dt`` of the state ``(alpha, alpha_dot, W_cam)``.
 
@@ -132,7 +132,7 @@ def rhs(t, y, mode, p, dydt):
     dydt[2] = power
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def guards(t, y, alpha_ddot, p, out, rates):
     """Event functions ``out = (delta [m], vr [m/s], delta_dot [m/s])`` and their exact
     time derivatives ``rates = (delta_dot [m/s], vr_dot [m/s^2], delta_ddot [m/s^2])``.
