@@ -22,7 +22,7 @@ from camdyn.errors import GeometryError
 from camdyn.model import layout as L
 
 __all__ = ["cam_angle", "cam_acceleration", "contact_kinematics", "contact_point", "zero_state", "contact_point_rate",
-           "contact_rates_trig", "rigid_angles"]
+           "contact_rates_trig", "penetrations", "rigid_angles"]
 
 
 @numba.njit(cache=True)
@@ -87,6 +87,18 @@ def contact_point_trig(ca, sa, ct, st, p):
     chi = ca * xc - sa * yc
     rho_c = a * a * b * b * inv_s * inv_s * inv_s
     return delta, chi, rho_c, xc, yc
+
+
+@numba.njit(cache=True)
+def penetrations(alphas, theta, p):
+    """Penetration ``delta`` [m] at each follower angle ``alphas`` [rad], cam at ``theta``
+    [rad] (a scan in one compiled call)."""
+    out = np.empty(alphas.size)
+    ct = math.cos(theta)
+    st = math.sin(theta)
+    for i in range(alphas.size):
+        out[i] = contact_point_trig(math.cos(alphas[i]), math.sin(alphas[i]), ct, st, p)[0]
+    return out
 
 
 @numba.njit(cache=True)

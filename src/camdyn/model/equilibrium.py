@@ -18,7 +18,7 @@ from scipy.optimize import brentq
 
 from camdyn.contact import contact_force
 from camdyn.errors import GeometryError
-from camdyn.geometry import cam_angle, contact_kinematics, contact_point, zero_state
+from camdyn.geometry import cam_angle, contact_kinematics, contact_point, penetrations, zero_state
 from camdyn.model import layout as L
 from camdyn.model.dynamics import evaluate
 from camdyn.parameters import System
@@ -83,7 +83,7 @@ def _touch_angle(p: np.ndarray, theta: float) -> float:
     f = lambda a: contact_point(a, theta, p)[0]
     lo, hi = -0.6, 0.6
     grid = np.linspace(lo, hi, 121)
-    vals = np.array([f(a) for a in grid])
+    vals = penetrations(grid, theta, p)
     idx = np.nonzero(np.diff(np.sign(vals)) < 0)[0]
     if idx.size == 0:
         raise GeometryError("the cam cannot reach the follower within ±34 degrees of horizontal; "

@@ -1,7 +1,7 @@
 """What a sweep's worker process runs: the compiled kernel and the metrics of one chunk
 of points that the parent has already prepared (parameter vectors, initial states).
 
-This module imports only numpy, numba, ``scipy.fft`` and camdyn's compiled modules: no
+This module imports only numpy, numba and camdyn's compiled modules: no SciPy,
 pint, xarray, rich or configuration code, so a worker process starts in about half a
 second (numba's own import is most of it) instead of 1.5 s, which is what lets a sweep
 on 2 workers use both cores for nearly all of its wall time.
