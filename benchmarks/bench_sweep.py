@@ -96,6 +96,40 @@ if __name__ == "__main__":
 """
 
 
+COMPUTE_SCRIPT = """
+import time, numpy as np, numba, camdyn
+from camdyn.simulation import prepare
+from camdyn.sweeps import kernel
+numba.set_num_threads(1)
+prep = prepare(camdyn.load_system("sundar2014-impact", {{"cam.runout": "3.5 mm", "motion.speed": 15.0}}))
+args = (prep.p[None, :].copy(), prep.y0[None, :].copy(), np.array([1 / 15.0]))
+kernel.simulate_points(*args, 2, 1, 8, 1e-6, 1e-9, 10 ** 6)
+start = time.perf_counter()
+for _ in range({repeats}):
+    kernel.simulate_points(*args, 300, 200, 64, 3e-7, 1e-10, 10 ** 8)
+print(time.perf_counter() - start)
+"""
+
+
+def machine_pair_efficiency(repeats: int, rounds: int) -> dict:
+    """The machine's own parallel efficiency for this compute: the same compiled job (no
+    sweep engine, no start-up: timed inside each process) alone, and as two processes at
+    once. Efficiency = alone / the slower of the pair (the pair's wall time); best of
+    ``rounds`` interleaved rounds."""
+    script = COMPUTE_SCRIPT.format(repeats=repeats)
+    alone, pairs = [], []
+    for _ in range(rounds):
+        alone.append(float(subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                                          check=True).stdout))
+        procs = [subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+                 for _ in range(2)]
+        pairs.append([float(p.communicate()[0]) for p in procs])
+    best_alone = min(alone)
+    best_pair = min(max(p) for p in pairs)
+    return {"job": f"ch3 rig at 15 Hz, {repeats} x 300 revolutions, compiled kernel only",
+            "alone_s": alone, "pairs_s": pairs, "efficiency": best_alone / best_pair}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--quick", action="store_true", help="smaller sweeps (a smoke test of this script)")
@@ -147,6 +181,10 @@ def main() -> None:
         result["scaling"] = {"sweep": f"{scale_num} speeds x {revs} revolutions (wall time incl. worker start, "
                                       f"best of {args.repeat} interleaved runs)",
                              **scaling}
+        machine = machine_pair_efficiency(40 if args.quick else 150, args.repeat)
+        result["scaling"]["machine_pair_efficiency"] = machine
+        print(f"machine: the compiled job alone {min(machine['alone_s']):.2f} s, as a pair of processes "
+              f"{min(max(p) for p in machine['pairs_s']):.2f} s: {machine['efficiency']:.0%}", flush=True)
 
         if not args.skip_memory:
             n1, n2 = (20, 50) if args.quick else (250, 400)
