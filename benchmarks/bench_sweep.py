@@ -10,9 +10,11 @@ pair of benchmarks/bench_simulate.py: SciPy rtol 1e-6 against camdyn rtol 3e-7) 
 by point on a subset of the speeds (every 40th) for a subset of the revolutions; its time
 per revolution at each speed is scaled to the whole sweep.
 
-Scaling: 160 speeds on 1 and on 2 workers, local pool and Dask LocalCluster, interleaved
-and repeated (``--repeat``, default 3); the best time of each is kept, since other load on
-the machine only ever adds time, and every run is recorded.
+Scaling: 160 speeds on 1 and on 2 workers, local pool and Dask LocalCluster (started by each
+sweep), interleaved and repeated (``--repeat``, default 3); the best time of each is kept,
+since other load on the machine only ever adds time, and every run is recorded. Also on
+Dask clusters that are already running (started and warmed once, outside the timing), and
+the machine's own efficiency for two copies of the compiled job at once.
 
 Usage:  python benchmarks/bench_sweep.py [--quick] [--skip-memory]   (writes benchmarks/sweep.json)
 """
@@ -130,6 +132,30 @@ def machine_pair_efficiency(repeats: int, rounds: int) -> dict:
             "alone_s": alone, "pairs_s": pairs, "efficiency": best_alone / best_pair}
 
 
+def dask_running_clusters(tmp: Path, num: int, revs: int, repeat: int) -> dict:
+    """Scaling on Dask clusters that are already running (the HPC case: a cluster started
+    once serves many sweeps): a LocalCluster of 1 and one of 2 workers, each warmed by a
+    tiny sweep, then the same sweep on each, interleaved; every run still connects a
+    client and checks the workers' warm-up, which stays in the timing."""
+    from distributed import LocalCluster
+
+    clusters = {n: LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+                for n in (1, 2)}
+    try:
+        for n, cluster in clusters.items():
+            timed_sweep(bifurcation(tmp / f"dask_warm{n}.nc", n, 2, 1), dask=cluster.scheduler_address)
+        raw = {1: [], 2: []}
+        for _ in range(repeat):
+            for n in (1, 2):
+                raw[n].append(timed_sweep(bifurcation(tmp / f"dask_running{n}.nc", num, revs, revs * 2 // 3),
+                                          dask=clusters[n].scheduler_address))
+    finally:
+        for cluster in clusters.values():
+            cluster.close()
+    return {"one_worker_s": min(raw[1]), "two_workers_s": min(raw[2]),
+            "efficiency_wall": min(raw[1]) / (2 * min(raw[2])), "all_runs_s": {str(n): raw[n] for n in (1, 2)}}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--quick", action="store_true", help="smaller sweeps (a smoke test of this script)")
@@ -178,6 +204,10 @@ def main() -> None:
                               "all_runs_s": {str(n): raw[n] for n in (1, 2)}}
             print(f"scaling {label}: 1 worker {times[1]:.1f} s, 2 workers {times[2]:.1f} s (start {starts[1]:.1f}, "
                   f"{starts[2]:.1f} s); efficiency {wall_eff:.0%} wall, {work_eff:.0%} without the start", flush=True)
+        scaling["dask_running"] = dask_running_clusters(tmp, scale_num, revs, args.repeat)
+        print(f"scaling on running Dask clusters: 1 worker {scaling['dask_running']['one_worker_s']:.1f} s, 2 workers "
+              f"{scaling['dask_running']['two_workers_s']:.1f} s; efficiency "
+              f"{scaling['dask_running']['efficiency_wall']:.0%}", flush=True)
         result["scaling"] = {"sweep": f"{scale_num} speeds x {revs} revolutions (wall time incl. worker start, "
                                       f"best of {args.repeat} interleaved runs)",
                              **scaling}
