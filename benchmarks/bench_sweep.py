@@ -10,11 +10,14 @@ pair of benchmarks/bench_simulate.py: SciPy rtol 1e-6 against camdyn rtol 3e-7) 
 by point on a subset of the speeds (every 40th) for a subset of the revolutions; its time
 per revolution at each speed is scaled to the whole sweep.
 
-Scaling: 160 speeds on 1 and on 2 workers, local pool and Dask LocalCluster (started by each
-sweep), interleaved and repeated (``--repeat``, default 3); the best time of each is kept,
-since other load on the machine only ever adds time, and every run is recorded. Also on
-Dask clusters that are already running (started and warmed once, outside the timing), and
-the machine's own efficiency for two copies of the compiled job at once.
+Scaling: the same sweep (400 speeds), and a smaller one of 160 speeds where the fixed cost
+of starting the workers weighs more, each on 1 and on 2 workers, local pool and Dask
+LocalCluster (started by each sweep), interleaved and repeated (``--repeat``, default 3);
+the best time of each is kept, since other load on the machine only ever adds time, and
+every run is recorded. Also on Dask clusters that are already running (started and warmed
+once, outside the timing), the CPU an idle 2-worker LocalCluster uses at Dask's default
+settings and with camdyn's ``QUIET_DASK``, and the machine's own efficiency for two copies
+of the compiled job at once.
 
 Usage:  python benchmarks/bench_sweep.py [--quick] [--skip-memory]   (writes benchmarks/sweep.json)
 """
@@ -136,11 +139,16 @@ def dask_running_clusters(tmp: Path, num: int, revs: int, repeat: int) -> dict:
     """Scaling on Dask clusters that are already running (the HPC case: a cluster started
     once serves many sweeps): a LocalCluster of 1 and one of 2 workers, each warmed by a
     tiny sweep, then the same sweep on each, interleaved; every run still connects a
-    client and checks the workers' warm-up, which stays in the timing."""
+    client and checks the workers' warm-up, which stays in the timing. The clusters run
+    with camdyn's QUIET_DASK settings, as docs/sweeps.md recommends for such a cluster."""
+    import dask
     from distributed import LocalCluster
 
-    clusters = {n: LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
-                for n in (1, 2)}
+    from camdyn.sweeps.execution import QUIET_DASK
+
+    with dask.config.set(QUIET_DASK):   # the settings docs/sweeps.md recommends for a cluster of sweeps
+        clusters = {n: LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+                    for n in (1, 2)}
     try:
         for n, cluster in clusters.items():
             timed_sweep(bifurcation(tmp / f"dask_warm{n}.nc", n, 2, 1), dask=cluster.scheduler_address)
@@ -154,6 +162,69 @@ def dask_running_clusters(tmp: Path, num: int, revs: int, repeat: int) -> dict:
             cluster.close()
     return {"one_worker_s": min(raw[1]), "two_workers_s": min(raw[2]),
             "efficiency_wall": min(raw[1]) / (2 * min(raw[2])), "all_runs_s": {str(n): raw[n] for n in (1, 2)}}
+
+
+IDLE_SCRIPT = """
+import sys, time
+if __name__ == "__main__":
+    import dask, psutil
+    from distributed import Client, LocalCluster
+    from camdyn.sweeps.execution import QUIET_DASK
+    with dask.config.set(QUIET_DASK if sys.argv[1] == "quiet" else {{}}):
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \\
+                Client(cluster):
+            time.sleep(2)
+            def cpu():
+                me = psutil.Process()
+                return sum(sum(p.cpu_times()[:2]) for p in [me, *me.children(recursive=True)])
+            start = cpu()
+            time.sleep({seconds})
+            print((cpu() - start) / {seconds})
+"""
+
+
+def dask_idle_cpu(seconds: float = 5.0) -> dict:
+    """CPU used by an idle LocalCluster of 2 workers (parent with scheduler, nannies and
+    client, plus the worker processes), in cores, at Dask's default settings and with
+    camdyn's QUIET_DASK."""
+    out = {}
+    for label in ("default", "quiet"):
+        run = subprocess.run([sys.executable, "-c", IDLE_SCRIPT.format(seconds=seconds), label], capture_output=True,
+                             text=True, check=True)
+        out[f"{label}_cores"] = float(run.stdout.split()[-1])
+    return out
+
+
+def scaling(tmp: Path, num: int, revs: int, repeat: int) -> dict:
+    """Parallel efficiency from 1 to 2 workers of the bifurcation sweep with ``num`` speeds:
+    the local pool and a fresh Dask LocalCluster per sweep (wall time including the
+    workers' start; the start alone is timed with a tiny sweep), interleaved, best of
+    ``repeat``; then on Dask clusters that are already running."""
+    out = {"sweep": f"{num} speeds x {revs} revolutions (wall time incl. worker start, best of {repeat} "
+                    f"interleaved runs)"}
+    for label, kwargs in (("local", {}), ("dask", {"dask": "local"})):
+        times, starts, raw = {}, {}, {1: [], 2: []}
+        for _ in range(repeat):   # interleaved, so slow spells of the machine hit both
+            for n in (1, 2):
+                # the start of the workers alone: one tiny point per worker
+                s = timed_sweep(bifurcation(tmp / f"{label}{n}s.nc", n, 2, 1), workers=n, **kwargs)
+                w = timed_sweep(bifurcation(tmp / f"{label}{n}.nc", num, revs, revs * 2 // 3), workers=n, **kwargs)
+                raw[n].append([w, s])
+        for n in (1, 2):   # the best of the repeats: other load on the machine only adds time
+            times[n], starts[n] = min(raw[n])
+        wall_eff = times[1] / (2 * times[2])
+        work_eff = (times[1] - starts[1]) / (2 * (times[2] - starts[2]))
+        out[label] = {"one_worker_s": times[1], "two_workers_s": times[2], "efficiency_wall": wall_eff,
+                      "start_one_worker_s": starts[1], "start_two_workers_s": starts[2],
+                      "efficiency_without_start": work_eff, "all_runs_s": {str(n): raw[n] for n in (1, 2)}}
+        print(f"scaling {label}, {num} speeds: 1 worker {times[1]:.1f} s, 2 workers {times[2]:.1f} s (start "
+              f"{starts[1]:.1f}, {starts[2]:.1f} s); efficiency {wall_eff:.0%} wall, {work_eff:.0%} without the start",
+              flush=True)
+    out["dask_running"] = dask_running_clusters(tmp, num, revs, repeat)
+    print(f"scaling on running Dask clusters, {num} speeds: 1 worker {out['dask_running']['one_worker_s']:.1f} s, "
+          f"2 workers {out['dask_running']['two_workers_s']:.1f} s; efficiency "
+          f"{out['dask_running']['efficiency_wall']:.0%}", flush=True)
+    return out
 
 
 def main() -> None:
@@ -183,34 +254,13 @@ def main() -> None:
         print(f"throughput: camdyn {wall:.1f} s on 2 workers; SciPy (scaled) {scipy_total:.0f} s; "
               f"x{scipy_total / wall:.0f}", flush=True)
 
-        scale_num = 40 if args.quick else 160
-        scaling = {}
-        for label, kwargs in (("local", {}), ("dask", {"dask": "local"})):
-            times, starts, raw = {}, {}, {1: [], 2: []}
-            for _ in range(args.repeat):   # interleaved, so slow spells of the machine hit both
-                for n in (1, 2):
-                    # the start of the workers alone: one tiny point per worker
-                    s = timed_sweep(bifurcation(tmp / f"{label}{n}s.nc", n, 2, 1), workers=n, **kwargs)
-                    w = timed_sweep(bifurcation(tmp / f"{label}{n}.nc", scale_num, revs, revs * 2 // 3),
-                                    workers=n, **kwargs)
-                    raw[n].append([w, s])
-            for n in (1, 2):   # the best of the repeats: other load on the machine only adds time
-                times[n], starts[n] = min(raw[n])
-            wall_eff = times[1] / (2 * times[2])
-            work_eff = (times[1] - starts[1]) / (2 * (times[2] - starts[2]))
-            scaling[label] = {"one_worker_s": times[1], "two_workers_s": times[2], "efficiency_wall": wall_eff,
-                              "start_one_worker_s": starts[1], "start_two_workers_s": starts[2],
-                              "efficiency_without_start": work_eff,
-                              "all_runs_s": {str(n): raw[n] for n in (1, 2)}}
-            print(f"scaling {label}: 1 worker {times[1]:.1f} s, 2 workers {times[2]:.1f} s (start {starts[1]:.1f}, "
-                  f"{starts[2]:.1f} s); efficiency {wall_eff:.0%} wall, {work_eff:.0%} without the start", flush=True)
-        scaling["dask_running"] = dask_running_clusters(tmp, scale_num, revs, args.repeat)
-        print(f"scaling on running Dask clusters: 1 worker {scaling['dask_running']['one_worker_s']:.1f} s, 2 workers "
-              f"{scaling['dask_running']['two_workers_s']:.1f} s; efficiency "
-              f"{scaling['dask_running']['efficiency_wall']:.0%}", flush=True)
-        result["scaling"] = {"sweep": f"{scale_num} speeds x {revs} revolutions (wall time incl. worker start, "
-                                      f"best of {args.repeat} interleaved runs)",
-                             **scaling}
+        # the issue's own sweep (400 speeds), and a smaller one where the fixed start weighs more
+        result["scaling"] = scaling(tmp, num, revs, args.repeat)
+        result["scaling_small"] = scaling(tmp, 40 if args.quick else 160, revs, args.repeat)
+        idle = dask_idle_cpu(2.0 if args.quick else 5.0)
+        result["scaling"]["dask_idle_cpu"] = idle
+        print(f"idle 2-worker LocalCluster: {idle['default_cores']:.3f} cores at Dask's defaults, "
+              f"{idle['quiet_cores']:.3f} with QUIET_DASK", flush=True)
         machine = machine_pair_efficiency(40 if args.quick else 150, args.repeat)
         result["scaling"]["machine_pair_efficiency"] = machine
         print(f"machine: the compiled job alone {min(machine['alone_s']):.2f} s, as a pair of processes "

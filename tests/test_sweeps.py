@@ -176,6 +176,22 @@ def test_local_pool_inline_and_dask_are_bitwise_identical(tmp_path):
     assert not (tmp_path / "inline.nc.parts").exists()
 
 
+def test_camdyn_local_dask_cluster_runs_quiet_and_warm():
+    """The LocalCluster of dask="local" passes QUIET_DASK to its worker processes (Dask's
+    nannies hand their configuration to the workers they start), and they are warmed."""
+    from camdyn.sweeps.execution import QUIET_DASK, _executor
+
+    def worker_state():
+        import dask
+        import sys
+        return ([dask.config.get(key) for key in QUIET_DASK], "camdyn.sweeps.kernel" in sys.modules)
+
+    with _executor(2, "local", 1, None) as (pool, n, how):
+        states = pool._client.run(worker_state)
+    assert n == 2 and "2 workers" in how
+    assert list(states.values()) == [(list(QUIET_DASK.values()), True)] * 2
+
+
 def test_failed_point_is_recorded_and_the_sweep_goes_on(tmp_path):
     """With the pivot 20 mm above the cam centre, a 10 mm cam and a pivot raised to 27 mm are
     each fine alone, but together the cam cannot reach the follower: that point fails with

@@ -13,7 +13,11 @@ checkpoint per finished chunk.
   processes; ``dask="tcp://HOST:PORT"`` connects to a running scheduler (for example one
   started by dask-jobqueue on an HPC system, see docs/sweeps.md). The client's executor
   (``Client.get_executor``) takes the same calls as the local pool, and ``Client.run``
-  warms the compiled code once per worker.
+  warms the compiled code once per worker. A LocalCluster that camdyn starts runs with
+  Dask's background chores slowed down (:data:`QUIET_DASK`: at Dask's defaults an idle
+  2-worker cluster takes 13 % of a core, which on a 2-core machine comes straight out of
+  the workers' time), and its workers leave quickly when it closes, as the local pool's
+  do (:func:`camdyn.sweeps.worker.start_local`).
 - Inline: ``workers=0`` runs the chunks in this process, one after another, with the
   kernel's ``prange`` over the points of a chunk on ``threads`` threads.
 
@@ -42,10 +46,20 @@ from camdyn.sweeps import worker
 from camdyn.sweeps.spec import SweepSpec
 from camdyn.sweeps.store import Checkpoint
 
-__all__ = ["compute_chunk", "prepare_chunk", "run_sweep", "default_workers"]
+__all__ = ["compute_chunk", "prepare_chunk", "run_sweep", "default_workers", "QUIET_DASK"]
 
 STATUS_OK, STATUS_REFUSED, STATUS_SOLVER = 0, 1, 2
 MAX_STEPS_PER_REVOLUTION = 200_000
+
+#: Dask settings for the LocalCluster of ``dask="local"`` (and this process's client):
+#: the event-loop watchdog (default every 20 ms), the workers' statistical profiler
+#: (every 10 ms, for the dashboard, which a camdyn LocalCluster does not serve), the
+#: memory monitor (100 ms) and the system monitor (500 ms). Together they cut an idle
+#: 2-worker cluster's CPU use from 0.13 to 0.02 cores (measured, benchmarks/bench_sweep.py).
+QUIET_DASK = {"distributed.admin.tick.interval": "1s", "distributed.worker.profile.enabled": False,
+              "distributed.worker.memory.monitor-interval": "1s",
+              "distributed.admin.system-monitor.interval": "2s",
+              "distributed.deploy.cluster-repr-interval": "10s"}
 
 
 def default_workers() -> int:
@@ -136,20 +150,23 @@ def _executor(workers: int, dask: str | None, threads: int, point):
             yield pool, workers, f"{workers} local worker process(es)"
         return
     try:
+        import dask as dask_config
         from distributed import Client, LocalCluster
     except ImportError:
         raise ParameterError("running on Dask needs dask.distributed: pip install 'camdyn[cluster]'") from None
     with contextlib.ExitStack() as stack:
         if dask == "local":
+            stack.enter_context(dask_config.config.set(QUIET_DASK))
             cluster = stack.enter_context(LocalCluster(n_workers=max(workers, 1), threads_per_worker=1,
                                                        processes=True, dashboard_address=None))
             client = stack.enter_context(Client(cluster))
+            client.run(worker.start_local, threads, point)   # camdyn's own workers: warm, and a quick exit
         else:
             try:
                 client = stack.enter_context(Client(dask, timeout="20s"))
             except (OSError, TimeoutError) as exc:
                 raise ParameterError(f"cannot reach the Dask scheduler at {dask!r} ({exc})") from None
-        client.run(worker.warm, threads, point)
+            client.run(worker.warm, threads, point)
         n = len(client.scheduler_info()["workers"])
         yield client.get_executor(), max(n, 1), f"Dask at {client.scheduler.address} ({n} workers)"
 

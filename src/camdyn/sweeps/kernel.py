@@ -6,6 +6,11 @@ the discarded transient). The kernel returns the window's channels and, from the
 log, the contact onsets in the window and the peak impact force, so nothing but the
 window ever leaves compiled code. Points are independent: a point's result does not
 depend on the batch it runs in, or on the number of threads.
+
+The kernel releases the GIL (``nogil``): a Dask worker runs it in a thread beside its
+event loop, which must keep answering the scheduler's heartbeats through a chunk that
+may take minutes (a worker silent for ``distributed.scheduler.worker-ttl``, 5 min by
+default, is declared dead).
 """
 
 from __future__ import annotations
@@ -23,7 +28,7 @@ N_WINDOW = len(WINDOW)
 _DERIVED = (0, 3, 8, 14)   # columns of outputs.CHANNELS: alpha_ddot, Fn, sliding_velocity, in_contact
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, parallel=True, nogil=True)
 def simulate_points(params, starts, periods, revolutions, discard, samples, rtol, atol, max_steps):
     """Simulate every point of a batch.
 

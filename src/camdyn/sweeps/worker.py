@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import atexit
 import os
+import sys
 
 import numba
 import numpy as np
@@ -44,16 +45,25 @@ def warm(threads: int = 1, point=None) -> None:
                                np.array([float(period)]), 2, 1, 8, 1e-6, 1e-9, 10 ** 6)
 
 
+def _leave() -> None:
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(0)
+
+
 def start_local(threads: int = 1, point=None) -> None:
-    """Initializer of a local pool's worker process: :func:`warm`, and a quick exit.
+    """Initializer of a worker process that camdyn started itself (a local pool's, or a
+    ``dask="local"`` LocalCluster's): :func:`warm`, and a quick exit.
 
     A spawned process ends with a full interpreter shutdown, which with numba loaded
-    takes 0.2-0.4 s that the parent would spend waiting for the pool to close. A local
-    worker holds nothing to flush (each result has been sent whole before the next task
-    is taken), so it leaves by ``os._exit`` as soon as the pool tells it to stop.
+    takes 0.2-0.4 s that the parent would spend waiting for the workers to close. Such a
+    worker holds nothing to flush but its standard streams (each result has been sent
+    whole before the next task is taken, and a closing Dask worker has closed its
+    connections before its interpreter ends), so it flushes them and leaves by
+    ``os._exit`` once it has been told to stop.
     """
     warm(threads, point)
-    atexit.register(os._exit, 0)
+    atexit.register(_leave)
 
 
 def run_chunk(params: np.ndarray, starts: np.ndarray, periods: np.ndarray, ok: np.ndarray, run: tuple,
