@@ -15,7 +15,7 @@ checkpoint per finished chunk.
   (``Client.get_executor``) takes the same calls as the local pool, and ``Client.run``
   warms the compiled code once per worker. A LocalCluster that camdyn starts runs with
   Dask's background chores slowed down (:data:`QUIET_DASK`: at Dask's defaults an idle
-  2-worker cluster takes 13 % of a core, which on a 2-core machine comes straight out of
+  2-worker cluster takes 10-13 % of a core, which on a 2-core machine comes straight out of
   the workers' time), and its workers leave quickly when it closes, as the local pool's
   do (:func:`camdyn.sweeps.worker.start_local`).
 - Inline: ``workers=0`` runs the chunks in this process, one after another, with the
@@ -55,7 +55,7 @@ MAX_STEPS_PER_REVOLUTION = 200_000
 #: the event-loop watchdog (default every 20 ms), the workers' statistical profiler
 #: (every 10 ms, for the dashboard, which a camdyn LocalCluster does not serve), the
 #: memory monitor (100 ms) and the system monitor (500 ms). Together they cut an idle
-#: 2-worker cluster's CPU use from 0.13 to 0.02 cores (measured, benchmarks/bench_sweep.py).
+#: 2-worker cluster's CPU use from 0.10-0.13 to 0.015 cores (measured, benchmarks/bench_sweep.py).
 QUIET_DASK = {"distributed.admin.tick.interval": "1s", "distributed.worker.profile.enabled": False,
               "distributed.worker.memory.monitor-interval": "1s",
               "distributed.admin.system-monitor.interval": "2s",
