@@ -1,6 +1,7 @@
 # Two commands do all the set-up on a fresh machine with Python 3.11:
 #   make demo   - create .venv, install camdyn, run the demonstration (prints results, writes out/)
-#   make test   - create .venv, install camdyn with test extras, run the test suite
+#   make test   - create .venv, install camdyn with test extras, check style (ruff) and layers
+#                 (import-linter), run the test suite
 PYTHON ?= python3
 VENV ?= .venv
 BIN = $(VENV)/bin
@@ -18,6 +19,8 @@ demo: $(BIN)/.installed
 	$(BIN)/camdyn demo --out out
 
 test: $(BIN)/.installed
+	$(BIN)/ruff check src tests benchmarks examples
+	$(BIN)/lint-imports
 	$(BIN)/python -m pytest -q
 
 bench: $(BIN)/.installed

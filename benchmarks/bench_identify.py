@@ -1,6 +1,6 @@
-"""Benchmark: friction estimation from a 10 s record at 10 kHz (issue 4 asks < 1 s), with
+"""Benchmark: friction estimation from a 10 s record at 10 kHz (target: under 1 s), with
 and without the cam speed given; the half-power damping estimate; and the impact damping
-(beta, n) from 20 impacts at 204.8 kHz (issue 6 asks < 30 s on 2 cores), whose
+(beta, n) from 20 impacts at 204.8 kHz (target: under 30 s on 2 cores), whose
 per-impact simulations run batched in the compiled core.
 
 Usage:  python benchmarks/bench_identify.py   (writes benchmarks/identify.json)
@@ -17,8 +17,12 @@ import camdyn
 from camdyn.identification.friction import estimate_friction
 from camdyn.identification.impact_damping import estimate_impact_damping
 from camdyn.identification.impact_events import impact_events
-from camdyn.identification.modal import accelerance, half_power_damping, synthesize_impulse_test
-from camdyn.synthesis import synthesize
+from camdyn.identification.modal import (
+    accelerance,
+    half_power_damping,
+    synthesize_impulse_test,
+)
+from camdyn.records.synthesis import synthesize
 
 
 def best_of(fn, repeat=5):

@@ -1,5 +1,5 @@
 """Benchmark: the compiled core against a plain SciPy solve_ivp implementation of the
-same model (camdyn.reference), side by side, at the same accuracy.
+same model (camdyn.testing.oracle), side by side, at the same accuracy.
 
 Accuracy is measured, not assumed: a SciPy DOP853 run at rtol 1e-12 is the truth;
 each SciPy method runs at its tolerance, camdyn runs at a ladder of tolerances, and
@@ -22,9 +22,10 @@ from pathlib import Path
 import numpy as np
 
 import camdyn
-from camdyn.core import driver, systems
-from camdyn.reference import reference_simulate
-from camdyn.simulation import METHODS, prepare
+from camdyn.integrator import driver
+from camdyn.simulation.runner import METHODS, prepare
+from camdyn.systems import registry as systems
+from camdyn.testing.oracle import reference_simulate
 
 CASES = {
     "ch4 sliding contact (e/a = 0.1, 11.55 Hz)": ("sundar2014-friction", {"cam.runout": "1.75 mm"}, 11.55, "LSODA"),

@@ -1,11 +1,11 @@
-"""Benchmark of parameter sweeps (issue 5): throughput against plain SciPy, parallel
+"""Benchmark of parameter sweeps: throughput against plain SciPy, parallel
 scaling from 1 to 2 workers (local pool and Dask LocalCluster), and peak memory of a
 100 000-point sweep.
 
 Throughput: the bifurcation diagram of the chapter 3 rig (e/rc = 0.2), 400 speeds from 5 to
 30 Hz, 300 revolutions each (the first 200 discarded), 64 samples per revolution, run by
 ``camdyn sweep``'s engine on 2 local workers, wall time including the workers' start.
-SciPy: ``camdyn.reference`` (solve_ivp DOP853 with contact events, the accuracy-matched
+SciPy: ``camdyn.testing.oracle`` (solve_ivp DOP853 with contact events, the accuracy-matched
 pair of benchmarks/bench_simulate.py: SciPy rtol 1e-6 against camdyn rtol 3e-7) run point
 by point on a subset of the speeds (every 40th) for a subset of the revolutions; its time
 per revolution at each speed is scaled to the whole sweep.
@@ -62,8 +62,8 @@ def timed_sweep(table: dict, **kwargs) -> float:
 
 
 def scipy_seconds_per_revolution(speeds, revolutions: int) -> list[float]:
-    from camdyn.reference import reference_simulate
-    from camdyn.simulation import prepare
+    from camdyn.simulation.runner import prepare
+    from camdyn.testing.oracle import reference_simulate
 
     base = camdyn.load_system("sundar2014-impact", {"cam.runout": "3.5 mm"})
     out = []
@@ -103,7 +103,7 @@ if __name__ == "__main__":
 
 COMPUTE_SCRIPT = """
 import time, numpy as np, numba, camdyn
-from camdyn.simulation import prepare
+from camdyn.simulation.runner import prepare
 from camdyn.sweeps import kernel
 numba.set_num_threads(1)
 prep = prepare(camdyn.load_system("sundar2014-impact", {{"cam.runout": "3.5 mm", "motion.speed": 15.0}}))

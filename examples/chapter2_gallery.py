@@ -23,11 +23,11 @@ import numpy as np
 import camdyn
 from camdyn.analysis.harmonics import amplitude_spectrum
 from camdyn.analysis.linear import linearize
-from camdyn.analysis.regime_map import regime_map
 from camdyn.analysis.restitution import energy_balance_residual
 from camdyn.analysis.spectra import spectrum_summary
 from camdyn.plotting import plot_regime_map
 from camdyn.sweeps import run_sweep, spec_from_dict
+from camdyn.sweeps.regime_map import regime_map
 
 OUT = Path(__file__).resolve().parent.parent / "docs" / "figures"
 WORK = Path(tempfile.mkdtemp(prefix="camdyn-gallery-"))
@@ -40,7 +40,7 @@ MODELS = {"A": {"contact.damping": "A", "contact.damping_ratio": "0.125"},
           "D": {"contact.damping": "D", "contact.damping_ratio": "0.119", "contact.beta": "4.25 s/m"},
           "E": {"contact.damping": "E", "contact.damping_ratio": "0.096", "contact.beta": "0.325 MN*s/m^1.25"}}
 #: the impacting stand-in rests on 0.4 nm of penetration: tolerances that resolve it
-#: (camdyn.simulation.penetration_resolution below 0.1)
+#: (camdyn.simulation.runner.penetration_resolution below 0.1)
 TOLERANCES = {"rtol": 1.5e-8, "atol": 1e-11}
 FIG_2_10 = {"contact.length": 1.6e-3, "contact.damping": "D", "contact.damping_ratio": 0.01, "contact.beta": 4.25}
 

@@ -19,7 +19,7 @@ import numpy as np
 import camdyn
 from camdyn.errors import CamdynError
 from camdyn.identification.friction import estimate_friction
-from camdyn.synthesis import synthesize
+from camdyn.records.synthesis import synthesize
 
 MU = 0.3
 FS = 9460.0

@@ -24,12 +24,16 @@ import numpy as np
 
 import camdyn
 from camdyn.errors import CamdynError
-from camdyn.identification.impact_damping import ImpactProblem, estimate_impact_damping, residue_landscape
+from camdyn.identification.impact_damping import (
+    ImpactProblem,
+    estimate_impact_damping,
+    residue_landscape,
+)
 from camdyn.identification.impact_events import impact_events
 from camdyn.identification.restitution import estimate_restitution
 from camdyn.plotting import plot_impact_fit, plot_residue_landscape, plot_restitution
-from camdyn.simulation import simulate
-from camdyn.synthesis import synthesize, synthesize_impact_map
+from camdyn.records.synthesis import synthesize, synthesize_impact_map
+from camdyn.simulation.runner import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 FIG = ROOT / "docs" / "figures"

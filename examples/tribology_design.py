@@ -15,10 +15,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import camdyn  # noqa: E402
-from camdyn.analysis.design import design_map  # noqa: E402
 from camdyn.plotting import plot_contact_conditions, plot_design_map  # noqa: E402
 from camdyn.tribology import contact_conditions, normalized_friction  # noqa: E402
 from camdyn.tribology.benedict_kelley import benedict_kelley, operating_term  # noqa: E402
+from camdyn.tribology.design import design_map  # noqa: E402
 
 FIGURES = Path(__file__).resolve().parents[1] / "docs" / "figures"
 A = 17.5e-3

@@ -6,7 +6,7 @@ import pytest
 
 import camdyn
 from camdyn.analysis.chaos import lyapunov_exponent
-from camdyn.cli import main
+from camdyn.cli.app import main
 from camdyn.errors import ParameterError
 from camdyn.sweeps import compute_chunk, spec_from_dict
 

@@ -11,7 +11,7 @@ from camdyn.analysis.kinematics import loss_of_contact_speed
 from camdyn.analysis.restitution import energy_balance_residual
 from camdyn.errors import ParameterError
 from camdyn.model.dynamics import free_acceleration
-from camdyn.simulation import prepare
+from camdyn.simulation.runner import prepare
 
 
 def test_stand_in_loses_contact_where_the_thesis_says(impacting_standin):
@@ -58,7 +58,7 @@ def test_impact_map_is_the_rigid_limit_of_the_contact_model(impact_rig):
     friction off, the impact map given the contact model's own per-impact restitution:
     the gap in approach velocity and impact phase shrinks with the contact duration as
     the contact is made stiffer (duration ~ k^-0.4)."""
-    from camdyn.impact_map import simulate_impact_map
+    from camdyn.simulation.impact_map import simulate_impact_map
     rig = impact_rig.with_values(**{"friction.coefficient": 0.0})
     hz = 15.0
     gaps = []

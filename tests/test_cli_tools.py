@@ -3,9 +3,9 @@
 import json
 
 import pytest
-
-from camdyn.cli import main
 from test_results_cli import run_cli
+
+from camdyn.cli.app import main
 
 
 def test_synthesize_and_identify_friction(tmp_path, capsys):
@@ -71,7 +71,7 @@ def test_cli_tools_bad_input(args, words):
 
 
 def test_identify_impact_damping_and_restitution(tmp_path, capsys):
-    """Issue 6 CLI: synthesize at 204.8 kHz with 1 % noise, identify with n fixed (JSON
+    """synthesize at 204.8 kHz with 1 % noise, identify with n fixed (JSON
     keys of the issue), two records jointly with figures, and the restitution of an S3
     record."""
     a, b, s3 = tmp_path / "e20.nc", tmp_path / "e25.csv", tmp_path / "s3.nc"

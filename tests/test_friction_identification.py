@@ -1,16 +1,15 @@
-"""Friction estimator: round trips on simulated records with noise (issue 4), the thesis's
+"""Friction estimator: round trips on simulated records with noise, the thesis's
 validation case, and refusals."""
 
 import math
 
-import numpy as np
 import pytest
 
 import camdyn.identification.friction as friction_module
 from camdyn.analysis.kinematics import KinematicCheck
 from camdyn.errors import IdentificationError
 from camdyn.identification.friction import estimate_friction
-from camdyn.synthesis import synthesize
+from camdyn.records.synthesis import synthesize
 
 A = 17.5e-3
 
@@ -28,7 +27,7 @@ def test_thesis_validation_case(friction_rig):
     est = estimate_friction(system, rec)
     assert abs(est.mu - 0.3) / 0.3 < 0.007
     # the DC reactions are identified too (the thesis's own model gave -2.26 / -12.7 N;
-    # this reading of the rig has a lower preload, MODEL.md §5)
+    # this reading of the rig has a lower preload, docs/model.md §5)
     truth = synthesize(system, 11.55, revolutions=10, sample_rate=9460.0)
     assert est.Nx_dc == pytest.approx(float(truth["Nx"].mean()), abs=0.02)
     assert est.Ny_dc == pytest.approx(float(truth["Ny"].mean()), abs=0.05)
@@ -36,7 +35,7 @@ def test_thesis_validation_case(friction_rig):
 
 @pytest.mark.parametrize("ratio", [0.1, 0.2, 0.3])
 def test_round_trip_runout_with_noise(friction_rig, ratio):
-    """Issue 4: mu within 2 % for e/a 0.1-0.3 with 1 % noise on every channel."""
+    """mu within 2 % for e/a 0.1-0.3 with 1 % noise on every channel."""
     system = _rig(friction_rig, **{"cam.runout": ratio * A})
     rec = synthesize(system, 11.55, revolutions=30, sample_rate=10e3, noise=0.01, seed=int(ratio * 100))
     est = estimate_friction(system, rec)
@@ -46,7 +45,7 @@ def test_round_trip_runout_with_noise(friction_rig, ratio):
 
 @pytest.mark.parametrize("eccentricity", [0.31, 0.53])
 def test_round_trip_elliptic_table_4_7(friction_rig, eccentricity):
-    """Issue 4: within 5 % for the elliptic cams of table 4.7 (8.33 Hz, e = 0.1 a)."""
+    """within 5 % for the elliptic cams of table 4.7 (8.33 Hz, e = 0.1 a)."""
     system = _rig(friction_rig, **{"cam.runout": 0.1 * A, "cam.semi_minor": A * math.sqrt(1 - eccentricity ** 2)})
     rec = synthesize(system, 8.33, revolutions=25, sample_rate=10e3, noise=0.01, seed=7)
     assert estimate_friction(system, rec).mu == pytest.approx(0.3, rel=0.05)
@@ -89,7 +88,8 @@ def test_sliding_reversal_is_refused(friction_rig, monkeypatch):
     driven by a kinematic check that reports a reversal."""
     system = _rig(friction_rig, **{"cam.runout": 0.1 * A})
     rec = synthesize(system, 11.55, revolutions=10, sample_rate=10e3)
-    monkeypatch.setattr(friction_module, "check_regime", lambda s, f, **kw: KinematicCheck(True, True, 1.0, math.inf, 0))
+    monkeypatch.setattr(friction_module, "check_regime",
+                        lambda s, f, **kw: KinematicCheck(True, True, 1.0, math.inf, 0))
     with pytest.raises(IdentificationError, match="sliding velocity vr reverses"):
         estimate_friction(system, rec)
 

@@ -8,14 +8,22 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import camdyn
-from camdyn.contact import (
-    equivalent_radius, hertz_line_coefficient, hertz_point_coefficient, hunt_crossley_beta,
-)
-from camdyn.geometry import (
-    cam_acceleration, cam_angle, contact_kinematics, contact_point, contact_point_rate, contact_rates_trig,
-)
 from camdyn.model import layout as L
+from camdyn.model.contact import (
+    equivalent_radius,
+    hertz_line_coefficient,
+    hertz_point_coefficient,
+    hunt_crossley_beta,
+)
 from camdyn.model.dynamics import evaluate
+from camdyn.model.geometry import (
+    cam_acceleration,
+    cam_angle,
+    contact_kinematics,
+    contact_point,
+    contact_point_rate,
+    contact_rates_trig,
+)
 
 
 def brute_force(alpha, theta, a, b, e, ex, ey, h, n=200001):

@@ -1,4 +1,4 @@
-"""Impact damping (beta, n) and equivalent restitution (issue 6, thesis chapter 3):
+"""Impact damping (beta, n) and equivalent restitution (thesis chapter 3):
 round trips on simulated records with 1 % noise, the sensitivity of the residues
 (table 3.2), and refusals of records the estimator cannot use.
 
@@ -15,11 +15,15 @@ import numpy as np
 import pytest
 
 from camdyn.errors import CamdynError, IdentificationError
-from camdyn.identification.impact_damping import ImpactProblem, estimate_impact_damping, residue_landscape
+from camdyn.identification.impact_damping import (
+    ImpactProblem,
+    estimate_impact_damping,
+    residue_landscape,
+)
 from camdyn.identification.impact_events import impact_events
 from camdyn.identification.restitution import estimate_restitution
-from camdyn.io.measurements import make_record
-from camdyn.synthesis import synthesize, synthesize_impact_map
+from camdyn.records.schema import make_record
+from camdyn.records.synthesis import synthesize, synthesize_impact_map
 
 RC = 17.5e-3
 RATE = 204.8e3
@@ -46,7 +50,7 @@ def thesis_events(impact_rig):
 
 @pytest.mark.parametrize("point", range(4))
 def test_beta_with_n_fixed(thesis_events, point):
-    """Issue 6: with n fixed at its true value, beta within 5 % at each point alone."""
+    """with n fixed at its true value, beta within 5 % at each point alone."""
     ev = thesis_events[point]
     assert ev.count == 20
     est = estimate_impact_damping(ev.system, None, events=[ev], exponent=1.5, bootstrap=16)
@@ -57,7 +61,7 @@ def test_beta_with_n_fixed(thesis_events, point):
 
 @pytest.mark.parametrize("point", range(4))
 def test_damping_at_peak_with_n_free(thesis_events, point):
-    """Issue 6: with n free, beta * delta_peak^n within 5 % of the true law's damping at
+    """with n free, beta * delta_peak^n within 5 % of the true law's damping at
     the same penetration; the bootstrap interval is reported."""
     ev = thesis_events[point]
     est = estimate_impact_damping(ev.system, None, events=[ev], bootstrap=16)
@@ -82,7 +86,7 @@ def test_residue_landscape_is_a_valley(thesis_events):
 
 
 def test_joint_fit_separates_n(thesis_events):
-    """Issue 6: a joint fit over the four points: n within 2 %, beta within 15 %."""
+    """a joint fit over the four points: n within 2 %, beta within 15 %."""
     est = estimate_impact_damping(thesis_events[0].system, None, events=thesis_events, bootstrap=16)
     assert est.records == 4 and est.impacts_used == 80
     assert abs(est.exponent / 1.5 - 1) < 0.02
@@ -97,7 +101,7 @@ def test_joint_fit_separates_n(thesis_events):
                                  {"contact.beta": 10 * BETA, "contact.exponent": 1.5}],
                          ids=["n=1.3", "beta x10"])
 def test_round_trip_parameters_the_thesis_never_used(impact_rig, law):
-    """Issue 6: the round trips hold for n = 1.3 and for beta ten times larger."""
+    """the round trips hold for n = 1.3 and for beta ten times larger."""
     beta, n = law["contact.beta"], law["contact.exponent"]
     events = []
     for ratio, speed in POINTS:
@@ -198,9 +202,9 @@ def test_pulsed_impact_map_is_one_consistent_motion(impact_rig):
     onset (the penetration there is below 1 nm)."""
     from scipy.integrate import cumulative_simpson
 
-    from camdyn.geometry import contact_kinematics
-    from camdyn.impact_map import simulate_impact_map
     from camdyn.model import layout as L
+    from camdyn.model.geometry import contact_kinematics
+    from camdyn.simulation.impact_map import simulate_impact_map
     system = impact_rig.with_values(**{"cam.runout": 0.2 * RC})
     ds = simulate_impact_map(system, 15.0, revolutions=3, gamma=0.8, sample_rate=2.048e6, pulse_duration=100e-6)
     t, a, v, acc = (ds[k].values for k in ("time", "alpha", "alpha_dot", "alpha_ddot"))
@@ -218,7 +222,7 @@ def test_pulsed_impact_map_is_one_consistent_motion(impact_rig):
 def test_impact_map_restitution_law(impact_rig):
     """S3 applies xi = 1 - gamma v_a at every impact (eq 3.24-3.27): the separation
     velocity it logs is -xi times the approach velocity, with xi from the law."""
-    from camdyn.impact_map import simulate_impact_map
+    from camdyn.simulation.impact_map import simulate_impact_map
     ds = simulate_impact_map(impact_rig, 15.0, revolutions=20, gamma=0.8, sample_rate=2000)
     va = ds["impact_approach_velocity"].values
     xi = ds["impact_restitution"].values

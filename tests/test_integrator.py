@@ -1,6 +1,6 @@
 """The compiled integrator against closed-form solutions (no cams involved).
 
-System 1 of :mod:`camdyn.core.systems` is the forced linear oscillator
+System 1 of :mod:`camdyn.systems.registry` is the forced linear oscillator
 y'' + 2 zeta w y' + w^2 y = A cos(W t), whose exact solution comes from the matrix
 exponential of the autonomous 4-state system (y, y', cos W t, sin W t).
 """
@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from camdyn.core import driver, systems
-from camdyn.core.steppers import dormand_prince_step, rosenbrock_step
+from camdyn.integrator import driver
+from camdyn.integrator.steppers import dormand_prince_step, rosenbrock_step
+from camdyn.systems import registry as systems
 
 W0, ZETA, AMP, WF = 3.0, 0.1, 1.0, 2.0
 
@@ -100,7 +101,7 @@ def test_dense_output_is_fourth_order():
     # the continuous extension of Dormand-Prince is (at least) 4th order: its local error
     # inside one step falls by at least 2^5 when the step is halved (a cubic Hermite
     # interpolant would only give 2^4); on this linear problem it does better still
-    from camdyn.core.steppers import dense
+    from camdyn.integrator.steppers import dense
     p = np.array([W0, ZETA, AMP, WF, 0.0])
     mode = np.zeros(driver.MODE_SIZE)
     errs = []

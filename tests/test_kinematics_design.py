@@ -5,10 +5,14 @@ import math
 import numpy as np
 import pytest
 
-from camdyn.analysis.design import design_map
 from camdyn.analysis.harmonics import harmonic_amplitudes
-from camdyn.analysis.kinematics import check_regime, inverse_kinematics, loss_of_contact_speed
-from camdyn.simulation import simulate
+from camdyn.analysis.kinematics import (
+    check_regime,
+    inverse_kinematics,
+    loss_of_contact_speed,
+)
+from camdyn.simulation.runner import simulate
+from camdyn.tribology.design import design_map
 
 A = 17.5e-3
 
@@ -30,13 +34,13 @@ def test_rigid_motion_matches_simulation(friction_rig):
 
 
 def test_loss_of_contact_speed_matches_simulation(friction_rig):
-    """Issue 3/4: the loss-of-contact speed from inverse kinematics within 2 % of the
+    """the loss-of-contact speed from inverse kinematics within 2 % of the
     speed at which a simulation first leaves the cam in steady state (the start from
     rest at full cam speed bounces the follower during the first half revolution, so the
     first two revolutions are left out)."""
     system = friction_rig.with_values(**{"cam.runout": 0.1 * A})
     speed = loss_of_contact_speed(system)
-    assert 15.0 < speed < 22.0            # MODEL.md §5: about 18.5 Hz for this reading
+    assert 15.0 < speed < 22.0            # docs/model.md §5: about 18.5 Hz for this reading
     below = simulate(system, 0.98 * speed, revolutions=12)
     above = simulate(system, 1.02 * speed, revolutions=12)
     for ds, expected in ((below, 1), (above, 0)):
@@ -75,7 +79,8 @@ def test_design_map_boundary_and_recommendation(friction_rig):
     i = list(ratios).index(rec_r)
     j = list(speeds).index(rec_s)
     assert ds["admissible"].values[i, j]
-    assert np.all(ds["harmonics_clear"].values == (5 * speeds[None, :] <= 0.2 * ds["natural_frequency"].values[:, None]))
+    clear = 5 * speeds[None, :] <= 0.2 * ds["natural_frequency"].values[:, None]
+    assert np.all(ds["harmonics_clear"].values == clear)
 
 
 def test_design_map_refuses_bad_grid(friction_rig):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from camdyn.cli import main
+from camdyn.cli.app import main
 
 FIG_2_10 = ["--set", "contact.length=1.6mm", "--set", "contact.damping=D", "--set", "contact.damping_ratio=0.01",
             "--set", "contact.beta=4.25 s/m"]

@@ -4,7 +4,13 @@ import numpy as np
 import pytest
 
 from camdyn.errors import DataError
-from camdyn.io.measurements import angular_acceleration, check_record, make_record, read_measurement, write_measurement
+from camdyn.io.measurements import (
+    angular_acceleration,
+    check_record,
+    make_record,
+    read_measurement,
+    write_measurement,
+)
 
 
 @pytest.fixture()

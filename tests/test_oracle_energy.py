@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import camdyn
-from camdyn.reference import reference_simulate
-from camdyn.simulation import prepare
+from camdyn.simulation.runner import prepare
+from camdyn.testing.oracle import reference_simulate
 
 
 def compare_with_reference(system, revolutions, speed, fs=20e3):
@@ -23,7 +23,7 @@ def compare_with_reference(system, revolutions, speed, fs=20e3):
 def test_sliding_contact_agrees_with_scipy(friction_rig):
     ds, ref, _ = compare_with_reference(friction_rig, 2, 11.55)
     scale = np.max(np.abs(ref[0]))
-    # 1e-6 relative (issue 2); both runs are far tighter than that
+    # 1e-6 relative; both runs are far tighter than that
     np.testing.assert_allclose(ds.alpha.values, ref[0], rtol=0, atol=1e-6 * scale)
     np.testing.assert_allclose(ds.alpha_dot.values, ref[1], rtol=0, atol=1e-6 * np.max(np.abs(ref[1])))
 
@@ -39,7 +39,7 @@ def test_impacts_agree_with_scipy(impact_rig):
 
 def test_energy_is_conserved_without_damping_or_friction(impact_rig):
     # undamped, frictionless: T + V_spring + V_gravity + V_contact - W_cam is constant.
-    # The potentials are written here from MODEL.md, independently of the core.
+    # The potentials are written here from docs/model.md, independently of the core.
     s = impact_rig.with_values(**{"contact.damping": "none", "friction.law": "none"})
     ds = camdyn.simulate(s, speed=16.0, revolutions=3, sample_rate=50e3, rtol=1e-11, atol=1e-13)
     assert ds.sizes["impact"] >= 2

@@ -10,8 +10,8 @@ from scipy.integrate import solve_ivp
 
 import camdyn
 from camdyn.analysis.restitution import restitution_error_curve
-from camdyn.cli import main
-from camdyn.io import load_netcdf, save_netcdf
+from camdyn.cli.app import main
+from camdyn.io.netcdf import load_netcdf, save_netcdf
 
 REQUIRED = ["alpha", "alpha_dot", "alpha_ddot", "penetration", "Fn", "Ff", "Fs", "moment_arm",
             "sliding_velocity", "sum_velocity", "Nx", "Ny", "cam_angle", "in_contact"]
@@ -85,7 +85,7 @@ def test_published_accuracy_of_the_restitution_laws(restitution_curves):
     # Hunt-Crossley and Lankarani-Nikravesh are first-order in (1 - e): within 3 % from e = 0.9
     for law in ("hunt-crossley", "lankarani-nikravesh"):
         assert all(abs(err[law][e]) < 0.03 for e in (0.9, 0.95)), err[law]
-        assert abs(err[law][0.8]) > 0.03  # ... but not at 0.8 (issue 2 hoped for 3 % there)
+        assert abs(err[law][0.8]) > 0.03  # ... but not at 0.8 (3 % was hoped for there)
     # Flores et al.: within 5 % from e = 0.6; -6 % at 0.5 and -15 % at 0.3 (docs/restitution.md)
     assert all(abs(err["flores"][e]) < 0.05 for e in E_VALUES if e >= 0.6), err["flores"]
     # Gonthier et al. hold 5 % over the whole range 0.3 to 0.95
@@ -93,7 +93,7 @@ def test_published_accuracy_of_the_restitution_laws(restitution_curves):
 
 
 def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "camdyn.cli", *args], capture_output=True, text=True)
+    return subprocess.run([sys.executable, "-m", "camdyn.cli.app", *args], capture_output=True, text=True)
 
 
 def test_cli_simulate_json(tmp_path):

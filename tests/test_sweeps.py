@@ -12,16 +12,16 @@ import time
 import numpy as np
 import pytest
 import xarray as xr
+from test_results_cli import run_cli
 
 import camdyn
 from camdyn.analysis.kinematics import inverse_kinematics, loss_of_contact_speed
-from camdyn.cli import main
+from camdyn.cli.app import main
 from camdyn.errors import ParameterError, UnitError, UnknownKeyError
-from camdyn.reference import reference_simulate
-from camdyn.simulation import prepare
+from camdyn.simulation.runner import prepare
 from camdyn.sweeps import compute_chunk, load_spec, run_sweep, spec_from_dict
 from camdyn.sweeps.metrics import poincare_period
-from test_results_cli import run_cli
+from camdyn.testing.oracle import reference_simulate
 
 
 def _spec(tmp_path, speeds=("10 Hz", "16 Hz", "25 Hz"), revolutions=40, discard=20, chunk=2, name="s.nc", **run):
@@ -182,8 +182,9 @@ def test_camdyn_local_dask_cluster_runs_quiet_and_warm():
     from camdyn.sweeps.execution import QUIET_DASK, _executor
 
     def worker_state():
-        import dask
         import sys
+
+        import dask
         return ([dask.config.get(key) for key in QUIET_DASK], "camdyn.sweeps.kernel" in sys.modules)
 
     with _executor(2, "local", 1, None) as (pool, n, how):
@@ -259,8 +260,9 @@ def test_sigkill_then_resume_gives_the_uninterrupted_result(tmp_path):
     (tmp_path / "a.toml").write_text(SPEC_TOML.format(num=60, revolutions=300, name="a"))
     (tmp_path / "b.toml").write_text(SPEC_TOML.format(num=60, revolutions=300, name="b"))
     parts = tmp_path / "a.nc.parts"
-    proc = subprocess.Popen([sys.executable, "-m", "camdyn.cli", "sweep", str(tmp_path / "a.toml"), "--workers", "1",
-                             "--quiet", "--no-plot"], start_new_session=True, stdout=subprocess.DEVNULL,
+    proc = subprocess.Popen([sys.executable, "-m", "camdyn.cli.app", "sweep", str(tmp_path / "a.toml"),
+                             "--workers", "1", "--quiet", "--no-plot"], start_new_session=True,
+                            stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL)
     deadline = time.time() + 120
     while time.time() < deadline and len(list(parts.glob("chunk_*.npz"))) < 3:

@@ -1,4 +1,4 @@
-"""The thesis's tables (MODEL.md section 5) and closed-form limits of the simulation."""
+"""The thesis's tables (docs/model.md section 5) and closed-form limits of the simulation."""
 
 import math
 
@@ -8,9 +8,9 @@ from scipy.optimize import brentq
 
 import camdyn
 from camdyn.analysis.harmonics import harmonic_amplitudes, steady_window
-from camdyn.demo import TABLE_4_5
-from camdyn.reference import ReferenceModel
-from camdyn.simulation import prepare
+from camdyn.cli.demo import TABLE_4_5
+from camdyn.simulation.runner import prepare
+from camdyn.testing.oracle import ReferenceModel
 
 #: Thesis table 4.6 (e/a = 0.1): speed [Hz] -> first harmonic of alpha_ddot [rad/s^2].
 TABLE_4_6 = {2: 3.24, 5: 20.26, 8: 51.77, 11: 97.9, 14: 158.5, 17: 233.8, 21: 356.7}
@@ -26,7 +26,7 @@ def first_two_harmonics(system, ratio, speed):
 
 def kinematic_harmonics(system, ratio, speed, n=512):
     """Rigid-contact (inverse kinematics) limit: solve delta(alpha, Theta) = 0 with the
-    independent parametric geometry of camdyn.reference, then differentiate spectrally."""
+    independent parametric geometry of camdyn.testing.oracle, then differentiate spectrally."""
     s = system.with_values(**{"cam.runout": ratio * system.cam.semi_major, "motion.speed": speed})
     model = ReferenceModel(s, theta0=0.0)
     omega = 2 * math.pi * speed
@@ -55,12 +55,12 @@ def test_table_4_5_second_harmonic_within_20_percent(friction_rig, ratio):
     assert h2 == pytest.approx(TABLE_4_5[ratio][1], rel=0.20)
 
 
-@pytest.mark.xfail(strict=True, reason="camdyn is +4.5 % on table 4.5's first harmonic (issue 2 asks 3 %); "
+@pytest.mark.xfail(strict=True, reason="camdyn is +4.5 % on table 4.5's first harmonic (the target was 3 %); "
                                        "see docs/thesis-comparison.md")
 def test_table_4_5_first_harmonic_within_3_percent(friction_rig):
     # camdyn is +4.5 % on every row (docs/thesis-comparison.md): the thesis's two tables
     # disagree with each other by 2.7 % at the same operating point (next test), and
-    # camdyn equals the rigid-contact kinematics of MODEL.md's geometry to 0.2 %
+    # camdyn equals the rigid-contact kinematics of docs/model.md's geometry to 0.2 %
     # (test_compliant_contact_tends_to_rigid_kinematics). Strict: if a defensible
     # reading of the geometry closes the gap, this starts passing and must be promoted.
     (h1, _), _ = first_two_harmonics(friction_rig, 0.10, 11.55)
@@ -82,7 +82,7 @@ def test_table_4_6_first_harmonic_within_10_percent(friction_rig, speed):
 
 
 def test_table_4_6_at_21_hz_loses_contact(friction_rig):
-    # MODEL.md section 5: with the listed spring data the rig loses contact near
+    # docs/model.md section 5: with the listed spring data the rig loses contact near
     # 18.5 Hz at e/a = 0.1, so the thesis's 21 Hz row (permanent contact) cannot hold
     _, ds = first_two_harmonics(friction_rig, 0.10, 21.0)
     assert int(ds.in_contact.min()) == 0

@@ -9,10 +9,22 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from camdyn.errors import IdentificationError, PresetError
-from camdyn.identification.modal import accelerance, half_power_damping, synthesize_impulse_test
+from camdyn.identification.modal import (
+    accelerance,
+    half_power_damping,
+    synthesize_impulse_test,
+)
 from camdyn.model.layout import effective_modulus
-from camdyn.tribology import (contact_conditions, fit_benedict_kelley, hamrock_dowson_film, lambda_ratio,
-                              load_lubricant, lubrication_regime, normalized_friction, roughness_preset)
+from camdyn.tribology import (
+    contact_conditions,
+    fit_benedict_kelley,
+    hamrock_dowson_film,
+    lambda_ratio,
+    load_lubricant,
+    lubrication_regime,
+    normalized_friction,
+    roughness_preset,
+)
 from camdyn.tribology.benedict_kelley import benedict_kelley
 
 A = 17.5e-3
@@ -88,7 +100,7 @@ def test_benedict_kelley_round_trip():
 
 @pytest.mark.parametrize("zeta", [0.01, 0.02, 0.03, 0.05])
 def test_half_power_recovers_damping(zeta):
-    """Issue 4: zeta within 3 % on the synthetic two-mass impulse test, 1 % noise."""
+    """zeta within 3 % on the synthetic two-mass impulse test, 1 % noise."""
     rec = synthesize_impulse_test(damping_ratios=(zeta, 0.02), noise=0.01, seed=2)
     f1, f2 = rec.attrs["natural_frequencies"]
     freq, h = accelerance(rec)

@@ -5,9 +5,15 @@ import math
 import pytest
 
 import camdyn
-from camdyn.config import load_system, system_to_toml
-from camdyn.errors import GeometryError, ParameterError, PresetError, UnitError, UnknownKeyError
-from camdyn.units import parse_quantity, parse_speed
+from camdyn.errors import (
+    GeometryError,
+    ParameterError,
+    PresetError,
+    UnitError,
+    UnknownKeyError,
+)
+from camdyn.params.config import load_system, system_to_toml
+from camdyn.params.units import parse_quantity, parse_speed
 
 
 @pytest.mark.parametrize("text, hz", [("11.55Hz", 11.55), ("693 rpm", 11.55), ("11.55 1/s", 11.55),
@@ -38,7 +44,7 @@ def test_presets_load_and_cite():
 
 
 def test_preset_values_match_the_thesis(impact_rig, friction_rig):
-    # MODEL.md section 4
+    # docs/model.md section 4
     assert impact_rig.follower.inertia == pytest.approx(3.3e-3)
     assert impact_rig.follower.cg_distance == pytest.approx(0.086)
     assert impact_rig.contact.beta == pytest.approx(24.7e9)

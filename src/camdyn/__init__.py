@@ -10,7 +10,13 @@ Quick start::
 """
 
 from camdyn.errors import (
-    CamdynError, GeometryError, ParameterError, PresetError, SimulationError, UnitError, UnknownKeyError,
+    CamdynError,
+    GeometryError,
+    ParameterError,
+    PresetError,
+    SimulationError,
+    UnitError,
+    UnknownKeyError,
 )
 
 __version__ = "0.1.0"
@@ -30,13 +36,13 @@ def __getattr__(name):
     # lazy: importing camdyn (or a compiled submodule, as a sweep's worker process does)
     # neither compiles anything nor imports pint, xarray or SciPy
     if name in ("load_system", "list_presets"):
-        from camdyn import config
+        from camdyn.params import config
         return getattr(config, name)
     if name in _PARAMETERS:
-        from camdyn import parameters
-        return getattr(parameters, name)
+        from camdyn.params import system
+        return getattr(system, name)
     if name == "simulate":
-        from camdyn.simulation import simulate
+        from camdyn.simulation.runner import simulate
         return simulate
     if name in ("static_equilibrium", "natural_frequency"):
         from camdyn.model import equilibrium

@@ -288,7 +288,7 @@ def _map_categories(ds: xr.Dataset):
 
 
 def plot_regime_map(ds: xr.Dataset, path: str | Path) -> Path:
-    """Regime map (:func:`camdyn.analysis.regime_map.regime_map`): simulated regions over
+    """Regime map (:func:`camdyn.sweeps.regime_map.regime_map`): simulated regions over
     the two swept parameters, with the inverse-kinematics loss-of-contact curve (solid)
     and the boundary of sliding-velocity reversal (dashed)."""
     from matplotlib.colors import ListedColormap

@@ -1,4 +1,4 @@
-"""The largest Lyapunov exponent of the hybrid cam-follower (thesis 3.6, issue 3 item 4).
+"""The largest Lyapunov exponent of the hybrid cam-follower (thesis 3.6).
 
 Two nearby trajectories are integrated side by side through every contact, impact and
 separation, each with its own event location (so the exponent is computed across the
@@ -27,9 +27,10 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from camdyn.core import driver, systems
 from camdyn.errors import ParameterError, SimulationError
-from camdyn.parameters import System
+from camdyn.integrator import driver
+from camdyn.params.system import System
+from camdyn.systems import registry as systems
 
 __all__ = ["LyapunovResult", "lyapunov_exponent"]
 
@@ -123,7 +124,7 @@ def lyapunov_exponent(system: System, speed: float | None = None, revolutions: i
     rtol, atol : float
         Local error tolerances.
     """
-    from camdyn.simulation import prepare
+    from camdyn.simulation.runner import prepare
 
     if system.motion.kind != "constant":
         raise ParameterError("the Lyapunov exponent here needs constant cam motion (motion.kind = 'constant')")

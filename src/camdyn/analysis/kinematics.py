@@ -24,13 +24,18 @@ import xarray as xr
 from scipy.optimize import brentq
 
 from camdyn.errors import GeometryError, ParameterError
-from camdyn.friction import friction_coefficient
-from camdyn.geometry import contact_kinematics, contact_point, contact_point_rate, rigid_angles
 from camdyn.model import layout as L
 from camdyn.model.dynamics import evaluate
-from camdyn.model.equilibrium import _touch_angle
+from camdyn.model.equilibrium import touch_angle
+from camdyn.model.friction import friction_coefficient
+from camdyn.model.geometry import (
+    contact_kinematics,
+    contact_point,
+    contact_point_rate,
+    rigid_angles,
+)
 from camdyn.model.outputs import pivot_reaction
-from camdyn.parameters import System
+from camdyn.params.system import System
 
 __all__ = ["inverse_kinematics", "loss_of_contact_speed", "KinematicCheck", "check_regime"]
 
@@ -89,7 +94,7 @@ def _angles(system: System, points: int) -> tuple[np.ndarray, np.ndarray, np.nda
         raise ParameterError(f"points must be an integer >= 32, got {points!r}")
     p = L.pack(system, initial_angle=0.0)
     thetas = 2.0 * np.pi * np.arange(points) / points
-    start = _touch_angle(p, 0.0)
+    start = touch_angle(p, 0.0)
     alpha = rigid_angles(thetas, p, start)
     delta = np.array([contact_point(a, th, p)[0] for a, th in zip(alpha[::max(1, points // 64)],
                                                                    thetas[::max(1, points // 64)])])

@@ -48,7 +48,7 @@ import xarray as xr
 from camdyn.errors import ParameterError
 from camdyn.model import layout as L
 from camdyn.model.dynamics import evaluate
-from camdyn.parameters import System
+from camdyn.params.system import System
 
 __all__ = ["LinearModel", "linearize"]
 
@@ -170,7 +170,8 @@ class LinearModel:
 
     def _dataset(self, t, x, v, a, kind) -> xr.Dataset:
         ds = xr.Dataset(
-            {"alpha": ("time", self.equilibrium_angle + x, {"units": "rad", "long_name": "follower angle (linear model)"}),
+            {"alpha": ("time", self.equilibrium_angle + x,
+                        {"units": "rad", "long_name": "follower angle (linear model)"}),
              "alpha_dot": ("time", v, {"units": "rad/s", "long_name": "follower angular velocity (linear model)"}),
              "alpha_ddot": ("time", a, {"units": "rad/s^2",
                                         "long_name": "follower angular acceleration (linear model)"})},
@@ -196,8 +197,8 @@ def linearize(system: System, speed=None) -> LinearModel:
     ParameterError
         For an elliptic cam, or a follower that does not rest on the concentric cam.
     """
-    from camdyn.simulation import _with_speed, prepare
-    system = _with_speed(system, speed)
+    from camdyn.simulation.runner import prepare, with_speed
+    system = with_speed(system, speed)
     if system.cam.semi_major != system.cam.semi_minor:
         raise ParameterError("the linearized model needs a circular cam (cam.semi_major = cam.semi_minor)")
     concentric = prepare(system.with_values(**{"cam.runout": 0.0}))
@@ -208,8 +209,8 @@ def linearize(system: System, speed=None) -> LinearModel:
     p[L.VISCOUS_C] = own.viscous_c  # the simulated system's own law-A coefficient
     p[L.THETA0] = own.theta0        # and its own cam phase (the 0-state moves with e)
     a = concentric.equilibrium.angle
-    from camdyn.model.equilibrium import _static_parameters
-    slip = 1.0 if _static_parameters(system, concentric.theta0)[L.MU] >= 0 else -1.0
+    from camdyn.model.equilibrium import static_parameters
+    slip = 1.0 if static_parameters(system, concentric.theta0)[L.MU] >= 0 else -1.0
     eq = concentric.equilibrium   # a step small against the penetration (Hertz's delta^1.5 curves)
     ha = min(1e-7, 1e-3 * eq.penetration / abs(eq.moment_arm))
     hv = 1e-6

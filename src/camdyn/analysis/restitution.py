@@ -15,7 +15,7 @@ import numpy as np
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from camdyn.parameters import System
+from camdyn.params.system import System
 
 __all__ = ["single_impact", "restitution_error_curve", "energy_balance_residual"]
 
@@ -29,7 +29,7 @@ def single_impact(system: System, law: str, restitution: float, approach_velocit
     system : System
         Supplies geometry, inertia and Hertz contact.
     law : str
-        Damping law name (see :data:`camdyn.parameters.DAMPING_LAWS`).
+        Damping law name (see :data:`camdyn.params.system.DAMPING_LAWS`).
     restitution : float
         Coefficient ``e`` given to the law [-].
     approach_velocity : float
@@ -41,8 +41,8 @@ def single_impact(system: System, law: str, restitution: float, approach_velocit
         ``restitution`` (measured) [-], ``approach_velocity``, ``separation_velocity``
         [m/s], ``peak_penetration`` [m], ``duration`` [s].
     """
-    from camdyn.geometry import contact_point
-    from camdyn.simulation import prepare, simulate
+    from camdyn.model.geometry import contact_point
+    from camdyn.simulation.runner import prepare, simulate
 
     s = system.with_values(**{
         "motion.speed": 0.0, "environment.gravity": 0.0, "spring.stiffness": 0.0,
@@ -115,7 +115,7 @@ def energy_balance_residual(system: System, speeds, restitution: float) -> np.nd
     """
     from camdyn.errors import ParameterError
     from camdyn.model.dynamics import free_acceleration
-    from camdyn.simulation import prepare
+    from camdyn.simulation.runner import prepare
     if not 0.0 <= restitution <= 1.0:
         raise ParameterError(f"the coefficient of restitution must lie in [0, 1], got {restitution!r}")
     prep = prepare(system)

@@ -1,5 +1,5 @@
 """Coefficient of friction from the Fourier amplitudes of pivot forces and acceleration
-(thesis 4.6, eqs 4.29-4.40; MODEL.md §6).
+(thesis 4.6, eqs 4.29-4.40; docs/model.md §6).
 
 The force transducers at the pivot do not measure DC, so the mean pivot reaction
 ``(Nx_dc, Ny_dc)`` is unknown. The measured ``Nx``, ``Ny`` and ``alpha_ddot`` are fitted
@@ -28,13 +28,17 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import least_squares
 
-from camdyn.analysis.harmonics import estimate_speed, fit_harmonics, synthesize_harmonics
+from camdyn.analysis.harmonics import (
+    estimate_speed,
+    fit_harmonics,
+    synthesize_harmonics,
+)
 from camdyn.analysis.kinematics import check_regime, inverse_kinematics
 from camdyn.errors import IdentificationError, ParameterError
-from camdyn.io.measurements import angular_acceleration, check_record
 from camdyn.model import layout as L
 from camdyn.model.outputs import contact_forces_from_reaction
-from camdyn.parameters import System
+from camdyn.params.system import System
+from camdyn.records.schema import angular_acceleration, check_record
 
 __all__ = ["FrictionEstimate", "estimate_friction"]
 

@@ -32,10 +32,10 @@ import xarray as xr
 from scipy.optimize import least_squares
 
 from camdyn.errors import IdentificationError, ParameterError
-from camdyn.geometry import cam_angle, contact_kinematics
 from camdyn.identification.impact_events import ImpactEvents, impact_events
 from camdyn.identification.impact_kernel import simulate_impacts
 from camdyn.model import layout as L
+from camdyn.model.geometry import cam_angle, contact_kinematics
 
 __all__ = ["ImpactDampingEstimate", "ImpactProblem", "estimate_impact_damping", "residue_landscape"]
 
@@ -61,7 +61,7 @@ class ImpactDampingEstimate:
     confidence: dict             # 95 % bootstrap intervals of beta, exponent, damping_at_peak
     bootstrap: np.ndarray = field(repr=False)       # (B, 2): beta, n of the replicates
     per_impact: dict = field(repr=False, default_factory=dict)
-    problem: "ImpactProblem" = field(repr=False, default=None)
+    problem: ImpactProblem = field(repr=False, default=None)
 
     @property
     def beta_units(self) -> str:

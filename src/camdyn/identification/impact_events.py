@@ -31,12 +31,12 @@ from scipy.integrate import cumulative_simpson, simpson
 from scipy.optimize import brentq, minimize_scalar
 
 from camdyn.errors import IdentificationError, ParameterError
-from camdyn.geometry import contact_kinematics
 from camdyn.identification.impact_kernel import parabola_peak, return_time
-from camdyn.io.measurements import angular_acceleration, check_record
 from camdyn.model import layout as L
+from camdyn.model.geometry import contact_kinematics
 from camdyn.model.outputs import contact_forces_from_reaction
-from camdyn.parameters import System
+from camdyn.params.system import System
+from camdyn.records.schema import angular_acceleration, check_record
 
 __all__ = ["ImpactEvents", "impact_events", "detect_contacts"]
 
@@ -165,7 +165,7 @@ def _onset_lead(acc: np.ndarray, k0: int, tau: float) -> float:
     return float(min(tau, ratio * tau / (1.0 - ratio)))
 
 
-def _onset_cam_angle(p: np.ndarray, alpha0: float, alpha_dot0: float, theta_dot: float) -> tuple[float, float]:
+def onset_cam_angle(p: np.ndarray, alpha0: float, alpha_dot0: float, theta_dot: float) -> tuple[float, float]:
     """Cam angle [rad] at which the follower at ``alpha0`` just touches the cam (eq 3.5
     with zero penetration), choosing the root at which the cam approaches fastest.
 
@@ -331,8 +331,8 @@ def impact_events(system: System, record: xr.Dataset, speed: float | None = None
     offsets = np.full((count, width), np.nan)
     force = np.full((count, width), np.nan)
     pen = np.full((count, width), np.nan)
-    fields = {k: np.empty(count) for k in ("alpha0", "alpha0_map", "alpha_dot0", "alpha_ddot0", "theta0", "peak", "length",
-                                           "contact")}
+    fields = {k: np.empty(count) for k in ("alpha0", "alpha0_map", "alpha_dot0", "alpha_ddot0",
+                                           "theta0", "peak", "length", "contact")}
     alphas, rates = [], []
     leads = np.array([_onset_lead(acc, k, tau) for k in starts])
     for i in range(count):
@@ -346,7 +346,7 @@ def impact_events(system: System, record: xr.Dataset, speed: float | None = None
         c = _angle_constant(p, x[k_free], v[k_free], length - u[k_free])
         alpha = x + c
         direction = 1.0 if v[k_end] >= 0 else -1.0
-        theta0, alpha0 = _onset_cam_angle(p, c, alpha_dot0, theta_dot)
+        theta0, alpha0 = onset_cam_angle(p, c, alpha_dot0, theta_dot)
         alpha = alpha + (alpha0 - c)
         fields["alpha0"][i] = alpha0
         fields["alpha0_map"][i] = c

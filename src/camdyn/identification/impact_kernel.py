@@ -14,9 +14,10 @@ import math
 import numba
 import numpy as np
 
-from camdyn.core import driver, systems
+from camdyn.integrator import driver
 from camdyn.model import layout as L
 from camdyn.model.dynamics import evaluate, free_acceleration
+from camdyn.systems import registry as systems
 
 #: Status of a job whose simulation never separated from the cam.
 STATUS_NO_SEPARATION = 100

@@ -18,7 +18,7 @@ import numpy as np
 import xarray as xr
 
 from camdyn.errors import IdentificationError, ParameterError
-from camdyn.io.measurements import check_record, make_record
+from camdyn.records.schema import check_record, make_record
 
 __all__ = ["ModalDamping", "accelerance", "half_power_damping", "synthesize_impulse_test", "MIN_LINES"]
 
@@ -90,7 +90,8 @@ def accelerance(record: xr.Dataset) -> tuple[np.ndarray, np.ndarray]:
     return freq, h
 
 
-def half_power_damping(frequency: np.ndarray, response: np.ndarray, band: tuple[float, float] | None = None) -> ModalDamping:
+def half_power_damping(frequency: np.ndarray, response: np.ndarray,
+                       band: tuple[float, float] | None = None) -> ModalDamping:
     """Half-power (-3 dB) damping ratio of the highest peak of ``|response|`` in ``band`` [Hz].
 
     Raises

@@ -25,12 +25,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from camdyn.contact import equivalent_radius, hertz_line_coefficient, hertz_point_coefficient
 from camdyn.errors import IdentificationError
-from camdyn.geometry import contact_kinematics
-from camdyn.identification.impact_events import ImpactEvents, _onset_cam_angle, impact_events
+from camdyn.identification.impact_events import (
+    ImpactEvents,
+    impact_events,
+    onset_cam_angle,
+)
 from camdyn.identification.impact_kernel import free_flight
 from camdyn.model import layout as L
+from camdyn.model.contact import (
+    equivalent_radius,
+    hertz_line_coefficient,
+    hertz_point_coefficient,
+)
+from camdyn.model.geometry import contact_kinematics
 
 __all__ = ["RestitutionEstimate", "estimate_restitution"]
 
@@ -98,7 +106,7 @@ def estimate_restitution(system, record=None, speed: float | None = None, min_im
     # in the angle moves the root far (or past the cam's reach) and the mean of the
     # roots is biased.
     mean_map = float(np.mean(events.alpha0_map))
-    theta0, mean_onset = _onset_cam_angle(p, mean_map, float(np.mean(events.alpha_dot0)), omega)
+    theta0, mean_onset = onset_cam_angle(p, mean_map, float(np.mean(events.alpha_dot0)), omega)
     onset = events.alpha0_map + (mean_onset - mean_map)
     for i in range(k):
         a_b = onset[i] - tau * events.alpha_dot0[i]

@@ -1,7 +1,7 @@
-"""Equation of motion of the rocking follower (MODEL.md §3), compiled with numba.
+"""Equation of motion of the rocking follower (docs/model.md §3), compiled with numba.
 
 Clockwise moments about the pivot P (eq 3.16, 4.13, with the friction sign settled in
-:mod:`camdyn.friction`)::
+:mod:`camdyn.model.friction`)::
 
     I_P alpha_ddot = m g l_cg cos(alpha) + M_spring(alpha) + Fn chi + Ff h
 
@@ -18,10 +18,16 @@ import math
 
 import numba
 
-from camdyn.contact import contact_force
-from camdyn.friction import friction_coefficient
-from camdyn.geometry import cam_acceleration, cam_angle, contact_kinematics, contact_kinematics_trig, contact_rates_trig
 from camdyn.model import layout as L
+from camdyn.model.contact import contact_force
+from camdyn.model.friction import friction_coefficient
+from camdyn.model.geometry import (
+    cam_acceleration,
+    cam_angle,
+    contact_kinematics,
+    contact_kinematics_trig,
+    contact_rates_trig,
+)
 
 __all__ = ["spring_force", "spring_moment", "evaluate", "rhs", "guards"]
 

@@ -1,5 +1,5 @@
 """Static equilibrium, linearized natural frequency and the viscous damping constant
-(MODEL.md §3; thesis eqs 2.16-2.24, 4.20).
+(docs/model.md §3; thesis eqs 2.16-2.24, 4.20).
 
 The static equilibrium ``alpha*`` has ``alpha_dot = 0`` at the initial cam angle
 ``Theta0`` with the cam frozen, except that friction acts in the direction of the
@@ -16,12 +16,18 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from camdyn.contact import contact_force
 from camdyn.errors import GeometryError
-from camdyn.geometry import cam_angle, contact_kinematics, contact_point, penetrations, zero_state
 from camdyn.model import layout as L
+from camdyn.model.contact import contact_force
 from camdyn.model.dynamics import evaluate
-from camdyn.parameters import System
+from camdyn.model.geometry import (
+    cam_angle,
+    contact_kinematics,
+    contact_point,
+    penetrations,
+    zero_state,
+)
+from camdyn.params.system import System
 
 __all__ = ["Equilibrium", "static_equilibrium", "natural_frequency", "viscous_coefficient"]
 
@@ -60,7 +66,7 @@ class Equilibrium:
     stiffness: float
 
 
-def _static_parameters(system: System, theta0: float) -> np.ndarray:
+def static_parameters(system: System, theta0: float) -> np.ndarray:
     """Parameter vector with the cam frozen at ``theta0`` and no damping; friction keeps
     the direction (and, for tanh friction, the magnitude) the turning cam gives it."""
     p = L.pack(system, initial_angle=theta0)
@@ -70,7 +76,7 @@ def _static_parameters(system: System, theta0: float) -> np.ndarray:
     ps[L.OMEGA] = 0.0
     if p[L.FRICTION_LAW] != 0.0:
         theta, theta_dot = cam_angle(0.0, p)
-        a0 = _touch_angle(ps, theta)
+        a0 = touch_angle(ps, theta)
         vr = contact_kinematics(a0, 0.0, theta, theta_dot, p)[4]
         mu = p[L.MU] if p[L.FRICTION_LAW] == 1.0 else p[L.MU] * abs(math.tanh(p[L.SMOOTHING] * vr))
         ps[L.FRICTION_LAW] = 1.0
@@ -78,7 +84,7 @@ def _static_parameters(system: System, theta0: float) -> np.ndarray:
     return ps
 
 
-def _touch_angle(p: np.ndarray, theta: float) -> float:
+def touch_angle(p: np.ndarray, theta: float) -> float:
     """Follower angle [rad] at which the follower just touches the cam at ``theta``."""
     f = lambda a: contact_point(a, theta, p)[0]
     lo, hi = -0.6, 0.6
@@ -120,8 +126,8 @@ def static_equilibrium(system: System, theta0: float | None = None) -> Equilibri
         theta0 = system.motion.initial_angle
     if theta0 is None:
         theta0 = zero_state(system)[1]
-    ps = _static_parameters(system, theta0)
-    a_touch = _touch_angle(ps, theta0)
+    ps = static_parameters(system, theta0)
+    a_touch = touch_angle(ps, theta0)
     m_touch = _moment(a_touch, ps, contact=False)
     if m_touch < 0.0:  # spring pushes the follower into the cam: contact equilibrium
         chi = contact_point(a_touch, theta0, ps)[1]

@@ -1,4 +1,4 @@
-"""Packing a :class:`~camdyn.parameters.System` into the flat float64 vector used by
+"""Packing a :class:`~camdyn.params.system.System` into the flat float64 vector used by
 the compiled core.
 
 The compiled functions take one parameter vector ``p``; the integer constants below
@@ -11,7 +11,13 @@ import math
 
 import numpy as np
 
-from camdyn.parameters import CONTACT_KINDS, DAMPING_LAWS, FRICTION_LAWS, MOTION_KINDS, System
+from camdyn.params.system import (
+    CONTACT_KINDS,
+    DAMPING_LAWS,
+    FRICTION_LAWS,
+    MOTION_KINDS,
+    System,
+)
 
 # follower
 MASS = 0            # m [kg]

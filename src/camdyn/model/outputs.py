@@ -7,9 +7,9 @@ import math
 import numba
 import numpy as np
 
-from camdyn.geometry import contact_point_rate
 from camdyn.model import layout as L
 from camdyn.model.dynamics import evaluate, spring_force_trig
+from camdyn.model.geometry import contact_point_rate
 
 #: name, unit, long name of each derived channel, in column order.
 CHANNELS = (

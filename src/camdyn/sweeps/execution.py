@@ -35,13 +35,19 @@ import os
 
 import numpy as np
 import xarray as xr
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, \
-    TimeRemainingColumn
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 
-from camdyn.core import driver
 from camdyn.errors import CamdynError, ParameterError, SimulationError
+from camdyn.integrator import driver
 from camdyn.model.layout import SIZE
-from camdyn.simulation import penetration_resolution, prepare
+from camdyn.simulation.runner import penetration_resolution, prepare
 from camdyn.sweeps import worker
 from camdyn.sweeps.spec import SweepSpec
 from camdyn.sweeps.store import Checkpoint

@@ -1,6 +1,6 @@
 """The batched compiled kernel: many parameter points per numba call, ``prange`` over points.
 
-Each point is a whole hybrid simulation (:func:`camdyn.core.driver.integrate`) from its
+Each point is a whole hybrid simulation (:func:`camdyn.integrator.driver.integrate`) from its
 static equilibrium, sampled ``samples`` times per cam period over the kept window (after
 the discarded transient). The kernel returns the window's channels and, from the event
 log, the contact onsets in the window and the peak impact force, so nothing but the
@@ -18,9 +18,10 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from camdyn.core import driver, systems
-from camdyn.geometry import rigid_angles
+from camdyn.integrator import driver
+from camdyn.model.geometry import rigid_angles
 from camdyn.model.outputs import derived
+from camdyn.systems import registry as systems
 
 #: channels of the window, in the order of the kernel's ``window`` output
 WINDOW = ("alpha", "alpha_dot", "alpha_ddot", "Fn", "sliding_velocity", "in_contact", "alpha_rigid")

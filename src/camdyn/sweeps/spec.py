@@ -48,9 +48,16 @@ from pathlib import Path
 import numpy as np
 
 from camdyn import __version__
-from camdyn.config import SCHEMA, _convert, _unknown, load_system, system_from_toml, system_to_toml
 from camdyn.errors import CamdynError, ParameterError
-from camdyn.parameters import System
+from camdyn.params.config import (
+    SCHEMA,
+    _convert,
+    _unknown,
+    load_system,
+    system_from_toml,
+    system_to_toml,
+)
+from camdyn.params.system import System
 
 __all__ = ["METRICS", "Vary", "SweepSpec", "load_spec", "spec_from_dict"]
 
@@ -266,7 +273,7 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
                                  f"values ({n} and {len(v.values)} for {v.key})")
     # every value on its own must make a valid system (negative mass, unreachable cam, ...);
     # only combinations of values may fail (those points are recorded as failed)
-    from camdyn.simulation import prepare
+    from camdyn.simulation.runner import prepare
     for v in vary:
         for value in sorted(set(v.values)):
             try:

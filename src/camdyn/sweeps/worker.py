@@ -16,7 +16,7 @@ import sys
 import numba
 import numpy as np
 
-from camdyn.core import driver
+from camdyn.integrator import driver
 from camdyn.sweeps import kernel
 from camdyn.sweeps import metrics as M
 

@@ -1,5 +1,5 @@
 """The modified Benedict-Kelley friction law of the lubricated contact (thesis eqs
-4.41-4.43, as MODEL.md §6 reads the garbled text)::
+4.41-4.43, as docs/model.md §6 reads the garbled text)::
 
     mu = C1 / (C2 - Rm) * log10( <p> / (eta <|vr| ve^2>) )          (4.41)
     <p> = < 3 Fn / (2 pi rho_e delta) >                                (4.42)

@@ -28,11 +28,11 @@ import numpy as np
 import xarray as xr
 
 from camdyn.analysis.kinematics import inverse_kinematics
-from camdyn.contact import equivalent_radius
 from camdyn.errors import ParameterError, PresetError
+from camdyn.model.contact import equivalent_radius
 from camdyn.model.layout import effective_modulus
-from camdyn.parameters import System
-from camdyn.units import parse_quantity
+from camdyn.params.system import System
+from camdyn.params.units import parse_quantity
 
 __all__ = ["Lubricant", "load_lubricant", "list_lubricants", "roughness_preset", "hamrock_dowson_film",
            "pan_hamrock_film", "lambda_ratio", "lubrication_regime", "contact_conditions"]

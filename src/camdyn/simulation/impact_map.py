@@ -13,7 +13,7 @@ after impact follows from ``psi_dot = -alpha_dot chi - n . v_cam`` (eq 3.27):
 
     alpha_dot(after) = (xi psi_dot(before) - n . v_cam) / chi
 
-Each flight is one whole compiled simulation (:func:`camdyn.core.driver.integrate`),
+Each flight is one whole compiled simulation (:func:`camdyn.integrator.driver.integrate`),
 stopped at the next onset; friction impulses are not modelled (as in eq 3.27).
 
 A sampled accelerometer cannot show an instantaneous jump. With ``pulse_duration > 0``
@@ -33,15 +33,16 @@ import numpy as np
 import xarray as xr
 from scipy.integrate import solve_ivp
 
-from camdyn.config import system_to_toml
-from camdyn.core import driver, systems
 from camdyn.errors import ParameterError, SimulationError
-from camdyn.geometry import cam_angle, contact_kinematics
+from camdyn.integrator import driver
 from camdyn.model import layout as L
 from camdyn.model.dynamics import free_acceleration
-from camdyn.parameters import System
-from camdyn.simulation import prepare
-from camdyn.units import parse_speed
+from camdyn.model.geometry import cam_angle, contact_kinematics
+from camdyn.params.config import system_to_toml
+from camdyn.params.system import System
+from camdyn.params.units import parse_speed
+from camdyn.simulation.runner import prepare
+from camdyn.systems import registry as systems
 
 __all__ = ["simulate_impact_map"]
 

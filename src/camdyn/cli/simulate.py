@@ -1,36 +1,25 @@
-"""The ``camdyn`` command line.
-
-Every input error prints one line, ``error: ...``, on standard error and exits with
-status 2 (no traceback).
-"""
+"""Commands for presets, the static equilibrium, simulation and the demonstration."""
 
 from __future__ import annotations
 
 import json
 import math
-import sys
 from pathlib import Path
 from typing import List, Optional
 
 import typer
 from rich.table import Table
 
-from camdyn.config import SCHEMA, list_presets, load_system, preset_text, system_to_toml
-from camdyn.cli_tools import SetOption, _system, console, register
-from camdyn.errors import CamdynError
-from camdyn.units import parse_quantity, parse_speed
+from camdyn.cli.common import SetOption, console, load_source
+from camdyn.params.config import (
+    SCHEMA,
+    list_presets,
+    preset_text,
+    system_to_toml,
+)
+from camdyn.params.units import parse_quantity, parse_speed
 
-try:  # recent typer vendors click
-    from typer._click import exceptions as click_exceptions
-except ImportError:  # pragma: no cover
-    from click import exceptions as click_exceptions
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="Nonlinear dynamics of cam-follower systems with rolling-sliding contact.")
-presets_app = typer.Typer(help="List and show bundled parameter presets.", invoke_without_command=True)
-app.add_typer(presets_app, name="presets")
-
-@presets_app.callback()
 def presets_list(ctx: typer.Context):
     """List the presets (name and citation)."""
     if ctx.invoked_subcommand is not None:
@@ -43,13 +32,11 @@ def presets_list(ctx: typer.Context):
     console.print(table)
 
 
-@presets_app.command("show")
 def presets_show(name: str):
     """Print a preset as TOML (copy it to start your own configuration)."""
-    typer.echo(preset_text(name) if name in list_presets() else system_to_toml(load_system(name)))
+    typer.echo(preset_text(name) if name in list_presets() else system_to_toml(load_source(name)))
 
 
-@presets_app.command("keys")
 def presets_keys():
     """List every parameter key, its unit and meaning."""
     table = Table("key", "unit", "meaning")
@@ -58,13 +45,12 @@ def presets_keys():
     console.print(table)
 
 
-@app.command()
 def equilibrium(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                 set_: Optional[List[str]] = SetOption,
                 json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
     """Static equilibrium angle, contact force and linearized natural frequency."""
     from camdyn.model.equilibrium import static_equilibrium
-    system = _system(source, set_)
+    system = load_source(source, set_)
     eq = static_equilibrium(system)
     out = {
         "angle_deg": math.degrees(eq.angle), "angle_rad": eq.angle,
@@ -144,7 +130,6 @@ def _print_summary(out: dict):
     console.print(table)
 
 
-@app.command()
 def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              set_: Optional[List[str]] = SetOption,
              speed: Optional[str] = typer.Option(None, help="Cam speed, e.g. 11.55Hz or 693rpm."),
@@ -156,15 +141,15 @@ def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              rtol: float = typer.Option(1e-8, help="Relative tolerance."),
              json_out: bool = typer.Option(False, "--json", help="Print a JSON summary.")):
     """Simulate the follower and summarise the response."""
-    from camdyn.simulation import simulate as run
-    system = _system(source, set_)
+    from camdyn.simulation.runner import simulate as run
+    system = load_source(source, set_)
     fs = parse_quantity(sample_rate, "Hz", "--sample-rate")
     if speed is not None:
         speed = parse_speed(speed, "--speed")
     ds = run(system, speed=speed, revolutions=revolutions, sample_rate=fs, method=method, rtol=rtol)
     summary = _summary(ds)
     if out is not None:
-        from camdyn.io import save_netcdf
+        from camdyn.io.netcdf import save_netcdf
         save_netcdf(ds, out)
         summary["netcdf"] = str(out)
     if plot is not None:
@@ -180,38 +165,7 @@ def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                 console.print(f"wrote {summary[key]}")
 
 
-@app.command()
 def demo(out: Path = typer.Option(Path("out"), help="Folder for the figures and results.")):
     """Run the demonstration on the bundled presets: print key results, write figures."""
-    from camdyn.demo import run_demo
+    from camdyn.cli.demo import run_demo
     run_demo(out, console)
-
-
-register(app)  # identify, synthesize, tribology, design
-
-
-def main(argv=None) -> int:
-    """Entry point: run the app, turning input errors into one line and exit status 2."""
-    try:
-        app(args=argv, standalone_mode=False, prog_name="camdyn")
-    except CamdynError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except click_exceptions.UsageError as exc:
-        print(f"error: {exc.format_message()}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("aborted", file=sys.stderr)
-        return 1
-    except OSError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    return 0
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
-
-
-def run() -> None:  # console-script entry point
-    sys.exit(main())

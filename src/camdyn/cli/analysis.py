@@ -8,7 +8,7 @@ from typing import List, Optional
 
 import typer
 
-from camdyn.cli_tools import SetOption, _print_json, _system, console
+from camdyn.cli.common import SetOption, console, load_source, print_json
 from camdyn.errors import ParameterError
 
 _ALIASES = {"speed": "motion.speed"}
@@ -50,10 +50,10 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
                        quiet: bool = typer.Option(False, help="No progress bar.")):
     """Regime map over two parameters: every point simulated (contact kept, vr reversal, k
     impacts per revolution, irregular), beside the inverse-kinematics prediction."""
-    from camdyn.analysis.regime_map import regime_map
-    from camdyn.config import parse_assignments
+    from camdyn.params.config import parse_assignments
     from camdyn.plotting import plot_regime_map
     from camdyn.sweeps import spec_from_dict
+    from camdyn.sweeps.regime_map import regime_map
 
     if out.suffix not in (".nc", ".h5"):
         raise ParameterError(f"--out must end in .nc, got {out.name!r}")
@@ -89,12 +89,12 @@ def spectrum(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     """Amplitude spectrum of a simulated response: cam harmonics, resonance peaks and the
     linearized natural frequency."""
     from camdyn.analysis.spectra import spectrum_summary
-    from camdyn.cli_tools import _hertz
+    from camdyn.cli.common import parse_hertz
     from camdyn.plotting import plot_spectrum
-    from camdyn.simulation import simulate
+    from camdyn.simulation.runner import simulate
 
-    system = _system(source, set_)
-    ds = simulate(system, speed=speed, revolutions=revolutions, sample_rate=_hertz(sample_rate))
+    system = load_source(source, set_)
+    ds = simulate(system, speed=speed, revolutions=revolutions, sample_rate=parse_hertz(sample_rate))
     if variable not in ds or ds[variable].dims != ("time",):
         raise ParameterError(f"--variable must be a time series of the result, one of "
                              f"{sorted(k for k in ds.data_vars if ds[k].dims == ('time',))}, got {variable!r}")
@@ -103,7 +103,7 @@ def spectrum(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         plot_spectrum(ds, plot, variable=variable, harmonics=harmonics, revolutions=window,
                       resonances=[p["frequency_hz"] for p in summary["peaks"]])
     if json_:
-        _print_json(summary)
+        print_json(summary)
         return
     unit = summary["units"]
     console.print(f"{variable} at {summary['speed_hz']:.4g} Hz, last {window} revolutions "
@@ -115,8 +115,3 @@ def spectrum(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         console.print(f"peak at {p['frequency_hz']:.5g} Hz: {p['amplitude']:.4g} {unit}", highlight=False)
     if plot is not None:
         console.print(f"wrote {plot}", highlight=False)
-
-
-def register(app: typer.Typer) -> None:
-    app.command("map")(regime_map_command)
-    app.command("spectrum")(spectrum)

@@ -18,11 +18,11 @@ from rich.console import Console
 from rich.table import Table
 
 from camdyn.analysis.harmonics import harmonic_amplitudes
-from camdyn.config import load_system
-from camdyn.io import save_netcdf
+from camdyn.io.netcdf import save_netcdf
 from camdyn.model.equilibrium import static_equilibrium
+from camdyn.params.config import load_system
 from camdyn.plotting import plot_spectrum, plot_time_history
-from camdyn.simulation import simulate
+from camdyn.simulation.runner import simulate
 
 #: Thesis table 4.5: e/a -> (first, second harmonic of alpha_ddot [rad/s^2]) at 11.55 Hz.
 TABLE_4_5 = {0.05: (52.5, 1.01), 0.10: (105.0, 4.02), 0.15: (157.5, 9.05), 0.20: (210.0, 16.1),
@@ -89,7 +89,7 @@ def _friction_demo(out: Path, console: Console) -> dict:
     from camdyn.identification.friction import estimate_friction
     from camdyn.io.measurements import write_measurement
     from camdyn.plotting import plot_contact_conditions
-    from camdyn.synthesis import synthesize
+    from camdyn.records.synthesis import synthesize
     from camdyn.tribology import contact_conditions
 
     system = load_system("sundar2014-friction", {"cam.runout": "5.25 mm"})
@@ -115,7 +115,7 @@ def _impact_demo(out: Path, console: Console) -> dict:
     from camdyn.identification.impact_damping import estimate_impact_damping
     from camdyn.identification.impact_events import impact_events
     from camdyn.plotting import plot_impact_fit
-    from camdyn.synthesis import synthesize
+    from camdyn.records.synthesis import synthesize
 
     system = load_system("sundar2014-impact", {"cam.runout": "3.5 mm"})
     record = synthesize(system, 15.0, revolutions=21, sample_rate=204.8e3, noise=0.01, settle=100)

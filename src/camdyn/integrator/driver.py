@@ -27,11 +27,19 @@ import math
 import numba
 import numpy as np
 
-from camdyn.core import systems
-from camdyn.core.steppers import (
-    KIND_DOP853, KIND_DP5, KIND_HERMITE, dense, dop853_error_norm, dop853_extend, dop853_step,
-    dormand_prince_step, error_norm, rosenbrock_step,
+from camdyn.integrator.steppers import (
+    KIND_DOP853,
+    KIND_DP5,
+    KIND_HERMITE,
+    dense,
+    dop853_error_norm,
+    dop853_extend,
+    dop853_step,
+    dormand_prince_step,
+    error_norm,
+    rosenbrock_step,
 )
+from camdyn.systems import registry as systems
 
 COUNT_ACCEPTED = 0
 COUNT_REJECTED = 1
@@ -136,7 +144,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     Parameters
     ----------
     system : int
-        System id (:mod:`camdyn.core.systems`).
+        System id (:mod:`camdyn.systems.registry`).
     p : ndarray
         Parameter vector.
     y_start : ndarray (3,)

@@ -1,4 +1,4 @@
-"""Cam-follower geometry and kinematics in closed form (MODEL.md §1-2).
+"""Cam-follower geometry and kinematics in closed form (docs/model.md §1-2).
 
 Frames: origin at the follower pivot P, ``x`` towards the cam pivot, ``y`` up. The
 follower angle ``alpha`` is clockwise from ``x``; ``u = (cos alpha, -sin alpha)`` runs
@@ -103,7 +103,7 @@ def penetrations(alphas, theta, p):
 
 @numba.njit(cache=True)
 def contact_kinematics(alpha, alpha_dot, theta, theta_dot, p):
-    """Penetration, its rate, moment arm and sliding velocity (MODEL.md §2).
+    """Penetration, its rate, moment arm and sliding velocity (docs/model.md §2).
 
     Returns
     -------
@@ -227,6 +227,11 @@ def zero_state(system) -> tuple[float, float]:
     Ellipse (a > b): as in the thesis (4.3), the major axis is parallel to the
     follower, ``Theta0 = -a0``, so ``PEx sin a0 + PEy cos a0 = h + b``.
 
+    ``system.motion.zero_state`` chooses: ``"maximum-lift"`` is the first convention
+    (thesis eqs 3.3-3.4), ``"runout-parallel"`` the second (eqs 4.3-4.4, for a circle
+    ``h + rc`` with no runout in the touching condition), ``"auto"`` the first for a
+    circle and the second for an ellipse.
+
     Raises
     ------
     GeometryError
@@ -234,7 +239,8 @@ def zero_state(system) -> tuple[float, float]:
     """
     c, f = system.cam, system.follower
     h = f.surface_offset
-    rhs = h + c.semi_major + c.runout if c.is_circle else h + c.semi_minor
+    lift = system.motion.zero_state == "maximum-lift" or (system.motion.zero_state == "auto" and c.is_circle)
+    rhs = h + c.semi_major + c.runout if lift else h + c.semi_minor
     r = math.hypot(c.pivot_x, c.pivot_y)
     if rhs > r:
         raise GeometryError(
@@ -242,5 +248,5 @@ def zero_state(system) -> tuple[float, float]:
             f"but contact needs {rhs*1e3:.3g} mm (surface offset + cam size + runout)")
     phase = math.atan2(c.pivot_y, c.pivot_x)   # PEx sin a + PEy cos a = r sin(a + phase)
     a0 = math.asin(rhs / r) - phase             # the root with the bar nearest horizontal
-    theta0 = math.pi / 2 - a0 if c.is_circle else -a0
+    theta0 = math.pi / 2 - a0 if lift else -a0
     return a0, theta0

@@ -1,6 +1,6 @@
 """One step of each method, with its error estimate (the stepper half of the integrator).
 
-Both steppers integrate the 3-component state of :mod:`camdyn.core.systems`, whose
+Both steppers integrate the 3-component state of :mod:`camdyn.systems.registry`, whose
 first equation is ``dy0/dt = y1`` (a second-order system in first-order form) and
 whose third component is a quadrature that feeds back into nothing. The Rosenbrock
 stepper uses these facts to solve its linear systems in closed form.
@@ -12,14 +12,57 @@ import math
 
 import numba
 
-from camdyn.core import systems
-from camdyn.core.tableaus import (
-    DP_A21, DP_A31, DP_A32, DP_A41, DP_A42, DP_A43, DP_A51, DP_A52, DP_A53, DP_A54,
-    DP_A61, DP_A62, DP_A63, DP_A64, DP_A65, DP_B1, DP_B3, DP_B4, DP_B5, DP_B6,
-    DP_C2, DP_C3, DP_C4, DP_C5, DP_E1, DP_E3, DP_E4, DP_E5, DP_E6, DP_E7, DP_P,
-    RB_A, RB_C, RB_CC, RB_G, RB_GAMMA, RB_M, RB_STAGES,
-    D8_A, D8_A_FROM, D8_B, D8_B_FROM, D8_C, D8_D, D8_D_FROM, D8_E3, D8_E5, D8_STAGES,
+from camdyn.integrator.tableaus import (
+    D8_A,
+    D8_A_FROM,
+    D8_B,
+    D8_B_FROM,
+    D8_C,
+    D8_D,
+    D8_D_FROM,
+    D8_E3,
+    D8_E5,
+    D8_STAGES,
+    DP_A21,
+    DP_A31,
+    DP_A32,
+    DP_A41,
+    DP_A42,
+    DP_A43,
+    DP_A51,
+    DP_A52,
+    DP_A53,
+    DP_A54,
+    DP_A61,
+    DP_A62,
+    DP_A63,
+    DP_A64,
+    DP_A65,
+    DP_B1,
+    DP_B3,
+    DP_B4,
+    DP_B5,
+    DP_B6,
+    DP_C2,
+    DP_C3,
+    DP_C4,
+    DP_C5,
+    DP_E1,
+    DP_E3,
+    DP_E4,
+    DP_E5,
+    DP_E6,
+    DP_E7,
+    DP_P,
+    RB_A,
+    RB_C,
+    RB_CC,
+    RB_G,
+    RB_GAMMA,
+    RB_M,
+    RB_STAGES,
 )
+from camdyn.systems import registry as systems
 
 N = 3  # state size
 
@@ -132,7 +175,7 @@ def _solve(c, j10, j11, j20, j21, r, g):
 def rosenbrock_step(system, t, y, f0, h, mode, p, work, stages, y1, err):
     """Linearly implicit RODAS4 step.
 
-    The Jacobian comes from the system (:func:`camdyn.core.systems.jacobian`), the time
+    The Jacobian comes from the system (:func:`camdyn.systems.registry.jacobian`), the time
     derivative of the right-hand side from a forward difference. ``work`` and ``stages``
     are (6, 3) scratch arrays. Returns the number of right-hand-side calls.
     """
@@ -184,7 +227,7 @@ def _dop853_stage(system, t, y, h, s, mode, p, k, yt):
     """Stage ``s`` of DOP853 (steps and continuous extension alike) into ``k[s]``.
 
     The three components are summed side by side, over the row's nonzero columns only
-    (:data:`camdyn.core.tableaus.D8_A_FROM`).
+    (:data:`camdyn.integrator.tableaus.D8_A_FROM`).
     """
     c = D8_A[s, 0]
     a0 = c * k[0, 0]

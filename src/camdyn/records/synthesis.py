@@ -8,9 +8,9 @@ import numpy as np
 import xarray as xr
 
 from camdyn.errors import ParameterError
-from camdyn.io.measurements import make_record
-from camdyn.parameters import System
-from camdyn.simulation import simulate
+from camdyn.params.system import System
+from camdyn.records.schema import make_record
+from camdyn.simulation.runner import simulate
 
 __all__ = ["synthesize", "synthesize_impact_map"]
 
@@ -91,7 +91,7 @@ def synthesize_impact_map(system: System, speed: float | None = None, revolution
     ``alpha_dot`` appears as a Hann-shaped pulse of ``pulse_samples`` samples starting at
     the impact, with the jump as its area, as a band-limited accelerometer would see an
     instantaneous impact. The follower is integrated through each pulse
-    (:func:`camdyn.impact_map.simulate_impact_map` with ``pulse_duration``), so that the
+    (:func:`camdyn.simulation.impact_map.simulate_impact_map` with ``pulse_duration``), so that the
     record is one consistent motion that touches the cam at every onset.
     Only ``alpha_ddot`` is recorded (the restitution estimate needs no forces).
 
@@ -104,7 +104,7 @@ def synthesize_impact_map(system: System, speed: float | None = None, revolution
         the rig's real contacts; 8 or fewer samples cannot be integrated accurately).
     Other parameters as :func:`synthesize`.
     """
-    from camdyn.impact_map import simulate_impact_map
+    from camdyn.simulation.impact_map import simulate_impact_map
 
     _check_noise_and_settle(noise, settle)
     if speed is not None:

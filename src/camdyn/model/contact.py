@@ -1,4 +1,4 @@
-"""Normal contact laws: Hertz stiffness and contact damping (MODEL.md §3).
+"""Normal contact laws: Hertz stiffness and contact damping (docs/model.md §3).
 
 Hertz (eqs 2.13-2.14, 3.11-3.13), with ``1/E* = (1-nu_c^2)/Y_c + (1-nu_b^2)/Y_b``:
 

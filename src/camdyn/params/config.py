@@ -21,10 +21,18 @@ from importlib import resources
 from pathlib import Path
 
 from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyError
-from camdyn.parameters import (
-    DAMPING_ALIASES, DAMPING_LAWS, Cam, Contact, Follower, Friction, Motion, Spring, System,
+from camdyn.params.system import (
+    DAMPING_ALIASES,
+    DAMPING_LAWS,
+    Cam,
+    Contact,
+    Follower,
+    Friction,
+    Motion,
+    Spring,
+    System,
 )
-from camdyn.units import parse_quantity, parse_speed
+from camdyn.params.units import parse_quantity, parse_speed
 
 __all__ = ["SCHEMA", "list_presets", "preset_text", "load_system", "build_system", "flatten"]
 
@@ -43,7 +51,8 @@ SCHEMA: dict[str, tuple[str, str]] = {
     "follower.cg_distance": ("m", "distance from the pivot to the centre of gravity"),
     "follower.length": ("m", "bar length"),
     "follower.width": ("m", "bar width wb"),
-    "follower.pin_radius": ("m", "dowel-pin radius rd (0: contact on the bar face; a point contact then uses the cam curvature alone, eq 2.34)"),
+    "follower.pin_radius": ("m", "dowel-pin radius rd (0: contact on the bar face; a point contact then uses "
+                                     "the cam curvature alone, eq 2.34)"),
     "follower.youngs_modulus": ("Pa", "Young's modulus of the follower"),
     "follower.poisson_ratio": ("", "Poisson's ratio of the follower"),
     "follower.accelerometer_distance": ("m", "distance l_a of the tangential accelerometer from the pivot"),
@@ -70,13 +79,15 @@ SCHEMA: dict[str, tuple[str, str]] = {
     "motion.frequency": ("Hz", "frequency of oscillating motion"),
     "motion.initial_angle": ("rad", "initial cam angle Theta0 (default: the 0-state)"),
     "motion.direction": ("int", "+1 counter-clockwise (default), -1 clockwise"),
+    "motion.zero_state": ("str", "0-state fixing Theta0: 'maximum-lift' (thesis ch 3), 'runout-parallel' (ch 4) "
+                                 "or 'auto'"),
     "environment.gravity": ("m/s**2", "gravitational acceleration g"),
 }
 _META_KEYS = {"preset.name", "preset.citation", "preset.description"}
 
 
 def beta_unit(law: str, exponent: float) -> str:
-    """Unit of ``contact.beta`` for a damping law (MODEL.md §3)."""
+    """Unit of ``contact.beta`` for a damping law (docs/model.md §3)."""
     law = DAMPING_ALIASES.get(law, law)
     if law in ("stiffness-proportional", "stiffness-proportional-viscous"):
         return "s/m"
@@ -142,7 +153,7 @@ def _convert(key: str, raw, values: dict) -> object:
 
 
 def build_system(values: dict, name: str = "custom", citation: str = "") -> System:
-    """Build a :class:`~camdyn.parameters.System` from dotted keys and raw values.
+    """Build a :class:`~camdyn.params.system.System` from dotted keys and raw values.
 
     Parameters
     ----------
@@ -196,7 +207,7 @@ def build_system(values: dict, name: str = "custom", citation: str = "") -> Syst
 
 def list_presets() -> list[str]:
     """Names of the bundled presets."""
-    folder = resources.files("camdyn.presets")
+    folder = resources.files("camdyn.params.presets")
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
 
 
@@ -206,7 +217,7 @@ def preset_text(name: str) -> str:
         close = difflib.get_close_matches(name, list_presets(), n=3)
         hint = f"; did you mean {', '.join(close)}?" if close else ""
         raise PresetError(f"no preset named {name!r}{hint} (available: {', '.join(list_presets())})")
-    return resources.files("camdyn.presets").joinpath(f"{name}.toml").read_text()
+    return resources.files("camdyn.params.presets").joinpath(f"{name}.toml").read_text()
 
 
 def read_table(source: str | Path) -> tuple[dict, str, str]:
@@ -316,7 +327,8 @@ def system_to_toml(system: System) -> str:
               f"smoothing = {q(fr.smoothing, 's/m')}", "", "[motion]"]
     m = s.motion
     lines += [f'kind = "{m.kind}"', f"speed = {q(m.speed, 'Hz')}", f"amplitude = {q(m.amplitude, 'rad')}",
-              f"frequency = {q(m.frequency, 'Hz')}", f"direction = {m.direction}"]
+              f"frequency = {q(m.frequency, 'Hz')}", f"direction = {m.direction}",
+              f'zero_state = "{m.zero_state}"']
     if m.initial_angle is not None:
         lines.append(f"initial_angle = {q(m.initial_angle, 'rad')}")
     lines += ["", "[environment]", f"gravity = {q(s.gravity, 'm/s^2')}", ""]

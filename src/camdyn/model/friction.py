@@ -1,4 +1,4 @@
-"""Friction laws at the cam-follower contact (MODEL.md §3).
+"""Friction laws at the cam-follower contact (docs/model.md §3).
 
 The tangential force of the cam on the follower along ``u`` is ``Ff = mu(vr) Fn``,
 with ``vr`` the sliding velocity of the cam surface relative to the follower:
@@ -9,7 +9,7 @@ with ``vr`` the sliding velocity of the cam surface relative to the follower:
 
 Sign convention: the force of friction on the follower is ``+Ff u`` (it drags the
 follower along with the cam surface), so its moment about P, clockwise, is ``+Ff h``.
-MODEL.md writes ``-Ff h`` in the equation of motion but ``-Ff u`` in the pivot
+docs/model.md writes ``-Ff h`` in the equation of motion but ``-Ff u`` in the pivot
 reaction ``N = m a_G + Fn n - Ff u - ...``; only ``+Ff h`` is consistent with that
 reaction and with friction opposing slip. camdyn uses ``+Ff h``.
 """

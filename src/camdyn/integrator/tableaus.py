@@ -3,7 +3,8 @@
 Dormand-Prince 5(4) [1] with FSAL; the Rosenbrock method RODAS4 of Hairer and
 Wanner [2], L-stable and stiffly accurate, which keeps its accuracy on the stiff
 sustained-contact problem where an A-stable Rosenbrock method of the Kaps-Rentrop
-family needed ten times more steps (measured; see docs/integrator.md). The tests check each method's order of convergence
+family needed ten times more steps (measured; see docs/integrator.md).
+The tests check each method's order of convergence
 against a closed-form solution, so a mistyped coefficient fails them.
 
 References

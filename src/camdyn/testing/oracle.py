@@ -2,7 +2,7 @@
 
 It shares no code with the compiled core: the geometry uses the cam's parametric
 form (the contact point minimises ``n . X(phi)`` over the ellipse angle ``phi``)
-instead of the support function, the forces are written again from MODEL.md §3, and
+instead of the support function, the forces are written again from docs/model.md §3, and
 the hybrid system is integrated by :func:`scipy.integrate.solve_ivp` in segments
 between terminal events (contact onset and separation, reversal of the sliding
 velocity under Coulomb friction, peak penetration for laws D and E).
@@ -19,7 +19,7 @@ import math
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from camdyn.parameters import System
+from camdyn.params.system import System
 
 
 class ReferenceModel:
@@ -141,7 +141,6 @@ def reference_simulate(system: System, theta0: float, y0, t_end: float, t_eval, 
     delta, delta_dot, _, _, vr, *_ = model.geometry(t, y[0], y[1])
     contact = delta > 0
     slip = 1.0 if vr >= 0 else -1.0
-    compressing = delta_dot > 0
     out = np.full((3, t_eval.size), np.nan)
     nfev = 0
     n_events = 0

@@ -26,7 +26,7 @@ import xarray as xr
 from camdyn.analysis.kinematics import inverse_kinematics
 from camdyn.errors import CamdynError, ParameterError
 from camdyn.model.equilibrium import static_equilibrium
-from camdyn.parameters import System
+from camdyn.params.system import System
 from camdyn.tribology import contact_conditions, lubrication_regime
 
 __all__ = ["design_map", "AXES"]

@@ -8,7 +8,7 @@ from typing import List, Optional
 
 import typer
 
-from camdyn.cli_tools import SetOption, _grid, console
+from camdyn.cli.common import SetOption, console, parse_grid
 from camdyn.errors import ParameterError
 from camdyn.sweeps.metrics import REGIMES
 
@@ -65,11 +65,11 @@ def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                 quiet: bool = typer.Option(False, help="No progress bar.")):
     """Bifurcation diagram over cam speed: Poincare samples once per revolution, impacts per
     revolution, period and regime (a sweep; see 'camdyn sweep' for the general form)."""
-    from camdyn.config import parse_assignments
+    from camdyn.params.config import parse_assignments
     from camdyn.plotting import plot_sweep
     from camdyn.sweeps import run_sweep, spec_from_dict
 
-    grid = _grid(speeds, "--speeds", "Hz")
+    grid = parse_grid(speeds, "--speeds", "Hz")
     table = {"system": {"source": source, "set": parse_assignments(set_)},
              "vary": [{"key": "motion.speed", "values": [float(v) for v in grid]}],
              "run": {"revolutions": revolutions, "discard": discard},
@@ -94,14 +94,14 @@ def lyapunov(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     """Largest Lyapunov exponent of the steady motion at one speed (two nearby trajectories
     through every impact, renormalised once per revolution)."""
     from camdyn.analysis.chaos import lyapunov_exponent
-    from camdyn.cli_tools import _print_json, _system
-    from camdyn.units import parse_speed
+    from camdyn.cli.common import load_source, print_json
+    from camdyn.params.units import parse_speed
 
-    result = lyapunov_exponent(_system(source, set_), speed=parse_speed(speed), revolutions=revolutions,
+    result = lyapunov_exponent(load_source(source, set_), speed=parse_speed(speed), revolutions=revolutions,
                                transient=transient)
     half = result.running[revolutions // 2 - 1] if revolutions >= 2 else float("nan")
     if json_:
-        _print_json({"speed_hz": result.speed, "exponent_per_s": result.exponent,
+        print_json({"speed_hz": result.speed, "exponent_per_s": result.exponent,
                      "per_revolution": result.per_revolution, "exponent_half_record_per_s": float(half),
                      "revolutions": revolutions, "transient": transient})
         return

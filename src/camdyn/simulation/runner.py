@@ -8,15 +8,20 @@ import time as _time
 import numpy as np
 import xarray as xr
 
-from camdyn.config import system_to_toml
-from camdyn.core import driver, systems
 from camdyn.errors import ParameterError, SimulationError
-from camdyn.geometry import zero_state
+from camdyn.integrator import driver
 from camdyn.model import layout as L
-from camdyn.model.equilibrium import Equilibrium, static_equilibrium, viscous_coefficient
+from camdyn.model.equilibrium import (
+    Equilibrium,
+    static_equilibrium,
+    viscous_coefficient,
+)
+from camdyn.model.geometry import zero_state
 from camdyn.model.outputs import CHANNELS, derived
-from camdyn.parameters import System
-from camdyn.units import parse_speed
+from camdyn.params.config import system_to_toml
+from camdyn.params.system import System
+from camdyn.params.units import parse_speed
+from camdyn.systems import registry as systems
 
 __all__ = ["simulate", "prepare", "impact_table", "Prepared", "penetration_resolution"]
 
@@ -65,7 +70,7 @@ def penetration_resolution(prep: Prepared, rtol: float, atol: float) -> float:
     return (rtol * swing + atol) * chi / eq.penetration
 
 
-def _with_speed(system: System, speed) -> System:
+def with_speed(system: System, speed) -> System:
     if speed is None:
         return system
     hz = parse_speed(speed)
@@ -142,7 +147,7 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
         and ``long_name``; over ``impact``: the impact table. Attributes record the
         parameters (as TOML), the solver counters and the static equilibrium.
     """
-    system = _with_speed(system, speed)
+    system = with_speed(system, speed)
     if method not in METHODS:
         raise ParameterError(f"method must be one of {sorted(METHODS)}, got {method!r}")
     for name, val in (("rtol", rtol), ("atol", atol), ("sample_rate", sample_rate)):

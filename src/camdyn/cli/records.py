@@ -1,9 +1,8 @@
 """Commands for identification, tribology and experiment design, registered on the
-main ``camdyn`` app by :mod:`camdyn.cli`."""
+main ``camdyn`` app by :mod:`camdyn.cli.app`."""
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import List, Optional
@@ -14,45 +13,16 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
-from camdyn.config import load_system, parse_assignments
+from camdyn.cli.common import (
+    SetOption,
+    console,
+    load_source,
+    parse_grid,
+    parse_hertz,
+    print_json,
+)
 from camdyn.errors import ParameterError
-from camdyn.units import parse_quantity, parse_speed
-
-console = Console()
-identify_app = typer.Typer(help="Estimate model parameters from measured records.", no_args_is_help=True)
-SetOption = typer.Option(None, "--set", "-s", help="Override a parameter: KEY=VALUE, e.g. cam.runout=3.5mm.")
-
-
-def _system(source: str, assignments):
-    return load_system(source, parse_assignments(assignments))
-
-
-def _grid(text: str, what: str, unit: str | None = None) -> np.ndarray:
-    """``START:STOP:COUNT`` (inclusive, COUNT points) or a comma list."""
-    def value(s):
-        return parse_speed(s, what) if unit == "Hz" else float(parse_quantity(s, "", what))
-    try:
-        if ":" in text:
-            start, stop, count = text.split(":")
-            n = int(count)
-            if n < 1:
-                raise ValueError
-            return np.linspace(value(start), value(stop), n)
-        return np.array([value(s) for s in text.split(",")])
-    except ValueError:
-        raise ParameterError(f"{what}: expected START:STOP:COUNT or a comma list, got {text!r}") from None
-
-
-def _hertz(text: str) -> float:
-    """A frequency [Hz]; a bare number is taken as Hz."""
-    try:
-        return float(text)
-    except ValueError:
-        return parse_quantity(text, "Hz", "frequency")
-
-
-def _print_json(obj) -> None:
-    typer.echo(json.dumps(obj, indent=2, default=lambda o: o.item() if hasattr(o, "item") else str(o)))
+from camdyn.params.units import parse_quantity, parse_speed
 
 
 def synthesize(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
@@ -71,11 +41,11 @@ def synthesize(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                out: Path = typer.Option(..., help="Output file: .csv, .nc or .uff.")):
     """Simulate a measurement record (steady state, optional noise) and write it."""
     from camdyn.io.measurements import write_measurement
-    from camdyn.synthesis import synthesize as make
-    from camdyn.synthesis import synthesize_impact_map
+    from camdyn.records.synthesis import synthesize as make
+    from camdyn.records.synthesis import synthesize_impact_map
 
-    system = _system(source, set_)
-    rate = _hertz(sample_rate)
+    system = load_source(source, set_)
+    rate = parse_hertz(sample_rate)
     if restitution_gamma is not None:
         gamma = parse_quantity(restitution_gamma, "s/m", "restitution gamma")
         rec = synthesize_impact_map(system, parse_speed(speed) if speed else None, revolutions=revolutions,
@@ -98,15 +68,15 @@ def synthesize_impulse(damping: float = typer.Option(0.02, help="Damping ratio o
     from camdyn.io.measurements import write_measurement
 
     rec = synthesize_impulse_test(damping_ratios=(damping, 0.02), duration=duration,
-                                  sample_rate=_hertz(sample_rate), noise=noise)
+                                  sample_rate=parse_hertz(sample_rate), noise=noise)
     write_measurement(rec, out)
     fn = ", ".join(f"{f:.1f}" for f in rec.attrs["natural_frequencies"])
     console.print(f"wrote {out}: modes at {fn} Hz, lower-mode damping {100 * damping:g} %")
 
 
-@identify_app.command("friction")
 def identify_friction(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
-                      data: Path = typer.Argument(..., help="Record: .csv, .nc/.h5 or .uff (Nx, Ny, alpha_ddot or a_t)."),
+                      data: Path = typer.Argument(...,
+                                         help="Record: .csv, .nc/.h5 or .uff (Nx, Ny, alpha_ddot or a_t)."),
                       set_: Optional[List[str]] = SetOption,
                       speed: Optional[str] = typer.Option(None, help="Cam speed; default from the file or estimated."),
                       harmonics: int = typer.Option(20, help="Cam harmonics per signal in the force balance "
@@ -116,11 +86,11 @@ def identify_friction(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"
     from camdyn.identification.friction import estimate_friction
     from camdyn.io.measurements import read_measurement
 
-    system = _system(source, set_)
+    system = load_source(source, set_)
     rec = read_measurement(data)
     est = estimate_friction(system, rec, speed=parse_speed(speed) if speed else None, harmonics=harmonics)
     if json_out:
-        _print_json(est.to_dict())
+        print_json(est.to_dict())
         return
     table = Table("quantity", "value")
     table.add_row("coefficient of friction mu", f"{est.mu:.5g}")
@@ -135,7 +105,6 @@ def identify_friction(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"
         console.print(f"  [{mark}] {name}: {c['detail']}")
 
 
-@identify_app.command("modal-damping")
 def identify_modal(data: Path = typer.Argument(..., help="Impulse test: force [N] and acceleration [m/s^2]."),
                    band: Optional[str] = typer.Option(None, help="Search band, e.g. 700:1200 (Hz)."),
                    plot: Optional[Path] = typer.Option(None, help="Write the accelerance plot (PNG)."),
@@ -151,13 +120,13 @@ def identify_modal(data: Path = typer.Argument(..., help="Impulse test: force [N
         parts = band.split(":")
         if len(parts) != 2:
             raise ParameterError(f"--band: expected LOW:HIGH in Hz, got {band!r}")
-        limits = (_hertz(parts[0]), _hertz(parts[1]))
+        limits = (parse_hertz(parts[0]), parse_hertz(parts[1]))
     est = half_power_damping(freq, h, limits)
     if plot:
         from camdyn.plotting import plot_accelerance
         plot_accelerance(freq, h, est, plot)
     if json_out:
-        _print_json(est.to_dict())
+        print_json(est.to_dict())
         return
     console.print(f"natural frequency {est.natural_frequency:.2f} Hz, damping ratio "
                   f"{100 * est.damping_ratio:.3f} % (half-power band {est.lower:.2f}-{est.upper:.2f} Hz, "
@@ -174,7 +143,7 @@ def tribology(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     """Hertz pressure, velocities, slide-to-roll ratio, film thickness and lubrication regime."""
     from camdyn.tribology import contact_conditions, lubrication_regime
 
-    system = _system(source, set_)
+    system = load_source(source, set_)
     ds = contact_conditions(system, parse_speed(speed) if speed else None,
                             None if lubricant == "none" else lubricant, finish)
     if not ds.attrs["contact_kept"]:
@@ -194,7 +163,7 @@ def tribology(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         from camdyn.plotting import plot_contact_conditions
         plot_contact_conditions(ds, plot)
     if json_out:
-        _print_json(out)
+        print_json(out)
         return
     table = Table("quantity", "min", "mean", "max", "unit")
     for name, _, scale, shown in rows:
@@ -218,12 +187,12 @@ def design(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
            plot: Path = typer.Option(Path("design.png"), help="Write the map figure (PNG)."),
            json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
     """Map the design criteria of the friction experiment and recommend an operating window (thesis 4.4)."""
-    from camdyn.analysis.design import design_map
     from camdyn.plotting import plot_design_map
+    from camdyn.tribology.design import design_map
 
-    system = _system(source, set_)
-    grid_r = _grid(ratios, "ratios")
-    grid_s = _grid(speeds, "speeds", "Hz")
+    system = load_source(source, set_)
+    grid_r = parse_grid(ratios, "ratios")
+    grid_s = parse_grid(speeds, "speeds", "Hz")
     with Progress(TextColumn("design map"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
                   TimeRemainingColumn(), console=Console(stderr=True), transient=True,
                   disable=json_out) as bar:
@@ -231,7 +200,7 @@ def design(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         ds = design_map(system, axis, grid_r, grid_s, lubricant=lubricant, roughness=finish, regime=regime,
                         harmonic_margin=harmonic_margin, progress=lambda d, t: bar.update(task, completed=d))
     if out:
-        from camdyn.io import save_netcdf
+        from camdyn.io.netcdf import save_netcdf
         stored = ds.copy()
         for name in [k for k in ds.data_vars if ds[k].dtype == bool]:
             stored[name] = ds[name].astype("int8")
@@ -247,7 +216,7 @@ def design(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
               "recommended_speed_hz": ds.attrs["recommended_speed"], "admissible_speeds_hz": window,
               "admissible_points": int(adm.sum()), "points": int(adm.size), "figure": str(plot)}
     if json_out:
-        _print_json(result)
+        print_json(result)
         return
     table = Table(ds["ratio"].attrs["long_name"], "admissible speeds [Hz]")
     for r, (lo, hi) in window.items():
@@ -259,20 +228,3 @@ def design(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     else:
         console.print("no grid point meets every criterion")
     console.print(f"figure: {plot}")
-
-
-def register(app: typer.Typer) -> None:
-    """Add these commands to the main app."""
-    import camdyn.cli_impact  # noqa: F401  (registers the impact commands on identify_app)
-    from camdyn.cli_sweep import bifurcation, lyapunov, sweep
-
-    app.add_typer(identify_app, name="identify")
-    app.command("synthesize")(synthesize)
-    app.command("synthesize-impulse")(synthesize_impulse)
-    app.command("tribology")(tribology)
-    app.command("design")(design)
-    app.command("sweep")(sweep)
-    app.command("bifurcation")(bifurcation)
-    app.command("lyapunov")(lyapunov)
-    from camdyn.cli_analysis import register as register_analysis
-    register_analysis(app)

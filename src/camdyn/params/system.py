@@ -1,10 +1,10 @@
 """Parameter sets of the cam-follower model, as frozen dataclasses validated when built.
 
 All values are SI inside camdyn. Configuration files and the command line give them
-as text with units (see :mod:`camdyn.units`); :func:`camdyn.config.build_system`
+as text with units (see :mod:`camdyn.params.units`); :func:`camdyn.params.config.build_system`
 turns dotted keys such as ``cam.runout`` into these dataclasses.
 
-Symbols (MODEL.md, thesis nomenclature) are mapped in each field's docstring.
+Symbols (docs/model.md, thesis nomenclature) are mapped in each field's docstring.
 """
 
 from __future__ import annotations
@@ -16,10 +16,10 @@ from camdyn.errors import GeometryError, ParameterError
 
 __all__ = [
     "Cam", "Follower", "Spring", "Contact", "Friction", "Motion", "System",
-    "DAMPING_LAWS", "FRICTION_LAWS", "MOTION_KINDS", "CONTACT_KINDS",
+    "DAMPING_LAWS", "FRICTION_LAWS", "MOTION_KINDS", "ZERO_STATES", "CONTACT_KINDS",
 ]
 
-#: Contact damping laws (MODEL.md §3; thesis 2.3.4 and 3.2) and their integer codes
+#: Contact damping laws (docs/model.md §3; thesis 2.3.4 and 3.2) and their integer codes
 #: used by the compiled core. Letters A-E are the thesis's models.
 DAMPING_LAWS = {
     "none": 0,
@@ -42,6 +42,9 @@ DAMPING_ALIASES = {"A": "viscous", "B": "stiffness-proportional", "C": "zhang-wh
 RESTITUTION_LAWS = ("hunt-crossley", "lankarani-nikravesh", "flores", "gonthier", "hu-guo")
 FRICTION_LAWS = {"none": 0, "coulomb": 1, "tanh": 2}
 MOTION_KINDS = {"constant": 0, "oscillating": 1}
+#: Conventions for the 0-state that fixes ``Theta0`` when no initial angle is given
+#: (docs/model.md §2): the thesis's chapter 3 (eqs 3.3-3.4) and chapter 4 (eqs 4.3-4.4).
+ZERO_STATES = ("auto", "maximum-lift", "runout-parallel")
 CONTACT_KINDS = {"point": 0, "line": 1}
 
 
@@ -69,7 +72,7 @@ def _poisson(owner: str, value: float) -> None:
 
 @dataclass(frozen=True)
 class Cam:
-    """Eccentric circular or elliptic cam (MODEL.md §2).
+    """Eccentric circular or elliptic cam (docs/model.md §2).
 
     Attributes
     ----------
@@ -119,7 +122,7 @@ class Cam:
 
 @dataclass(frozen=True)
 class Follower:
-    """Rocking bar follower pivoted at P (MODEL.md §1, §4).
+    """Rocking bar follower pivoted at P (docs/model.md §1, §4).
 
     Attributes
     ----------
@@ -140,7 +143,7 @@ class Follower:
         Elastic constants of the contacting follower surface [Pa], [-].
     accelerometer_distance : float
         Distance ``l_a`` from P of the tangential accelerometer [m]; 0 means at the
-        free end (``length``). Measured ``alpha_ddot = a_t / l_a`` (MODEL.md §3).
+        free end (``length``). Measured ``alpha_ddot = a_t / l_a`` (docs/model.md §3).
     """
 
     mass: float
@@ -178,7 +181,7 @@ class Follower:
 
     @property
     def surface_offset(self) -> float:
-        """Distance ``h`` from the bar axis to the contact surface [m] (MODEL.md §1)."""
+        """Distance ``h`` from the bar axis to the contact surface [m] (docs/model.md §1)."""
         return 0.5 * self.width + 2.0 * self.pin_radius
 
 
@@ -217,7 +220,7 @@ class Spring:
 
 @dataclass(frozen=True)
 class Contact:
-    """Normal contact law (MODEL.md §3).
+    """Normal contact law (docs/model.md §3).
 
     Attributes
     ----------
@@ -277,7 +280,7 @@ class Contact:
 
 @dataclass(frozen=True)
 class Friction:
-    """Friction law on the follower, ``Ff = mu(vr) Fn`` (MODEL.md §3).
+    """Friction law on the follower, ``Ff = mu(vr) Fn`` (docs/model.md §3).
 
     Attributes
     ----------
@@ -304,7 +307,7 @@ class Friction:
 
 @dataclass(frozen=True)
 class Motion:
-    """Cam motion input (MODEL.md §1).
+    """Cam motion input (docs/model.md §1).
 
     Attributes
     ----------
@@ -318,7 +321,13 @@ class Motion:
     frequency : float
         Oscillation frequency ``f_c`` [Hz], oscillating motion.
     initial_angle : float or None
-        ``Theta0`` [rad]; None uses the 0-state (MODEL.md §2).
+        ``Theta0`` [rad]; None uses the 0-state (docs/model.md §2).
+    zero_state : str
+        Which 0-state fixes ``Theta0`` when ``initial_angle`` is None:
+        ``"maximum-lift"`` (thesis eqs 3.3-3.4: the cam centroid offset along the
+        follower normal), ``"runout-parallel"`` (thesis eqs 4.3-4.4: the runout, the
+        ellipse's major axis, parallel to the follower), or ``"auto"``: maximum lift for
+        a circle, runout parallel for an ellipse.
     direction : int
         +1 for counter-clockwise cam rotation (the default), -1 for clockwise; the
         thesis's self- against de-energizing studies (2.7.1) flip it.
@@ -330,6 +339,7 @@ class Motion:
     frequency: float = 0.0
     initial_angle: float | None = None
     direction: int = 1
+    zero_state: str = "auto"
 
     def __post_init__(self):
         _check_finite("motion", self)
@@ -340,6 +350,8 @@ class Motion:
         _nonnegative("motion", "frequency", self.frequency)
         if self.initial_angle is not None and not math.isfinite(self.initial_angle):
             raise ParameterError("motion.initial_angle must be finite")
+        if self.zero_state not in ZERO_STATES:
+            raise ParameterError(f"motion.zero_state must be one of {list(ZERO_STATES)}, got {self.zero_state!r}")
         if self.direction not in (1, -1):
             raise ParameterError(f"motion.direction must be +1 or -1, got {self.direction}")
         if self.kind == "oscillating" and (self.amplitude <= 0 or self.frequency <= 0):
@@ -386,7 +398,7 @@ class System:
             raise ParameterError("environment.gravity must be finite")
         _nonnegative("environment", "gravity", self.gravity)
         # The follower's contact line must pass below the cam pivot region: the cam
-        # pivot has to be on the cam's side of the follower (MODEL.md §1: cam above).
+        # pivot has to be on the cam's side of the follower (docs/model.md §1: cam above).
         h = self.follower.surface_offset
         reach = math.hypot(self.cam.pivot_x, self.cam.pivot_y)
         if reach <= h:
@@ -394,7 +406,7 @@ class System:
                 f"the cam pivot ({self.cam.pivot_x*1e3:g}, {self.cam.pivot_y*1e3:g}) mm lies inside "
                 f"the follower's contact surface offset ({h*1e3:g} mm)")
 
-    def with_values(self, **dotted) -> "System":
+    def with_values(self, **dotted) -> System:
         """Return a copy with SI values changed by dotted key, e.g. ``with_values(**{"cam.runout": 3.5e-3})``;
         ``cam.radius`` sets both semi-axes."""
         groups: dict[str, dict] = {}

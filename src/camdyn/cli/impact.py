@@ -1,6 +1,6 @@
 """CLI commands of the impact studies (thesis chapter 3): ``camdyn identify
 impact-damping`` and ``camdyn identify restitution``, registered on the ``identify``
-group by :mod:`camdyn.cli_tools`."""
+group by :mod:`camdyn.cli.records`."""
 
 from __future__ import annotations
 
@@ -11,9 +11,9 @@ from typing import List, Optional
 import typer
 from rich.table import Table
 
-from camdyn.cli_tools import SetOption, _print_json, _system, console, identify_app
+from camdyn.cli.common import SetOption, console, load_source, print_json
 from camdyn.errors import ParameterError
-from camdyn.units import parse_quantity, parse_speed
+from camdyn.params.units import parse_quantity, parse_speed
 
 
 def _per_record(values: Optional[List[str]], count: int, what: str, parse) -> list:
@@ -27,7 +27,6 @@ def _per_record(values: Optional[List[str]], count: int, what: str, parse) -> li
     return out
 
 
-@identify_app.command("impact-damping")
 def identify_impact_damping(
         source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         data: List[Path] = typer.Argument(..., help="Records (one per operating point): Nx, Ny, alpha_ddot or a_t."),
@@ -45,10 +44,13 @@ def identify_impact_damping(
                                                                          "residue-landscape figures here."),
         json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
     """Impact damping beta, n of Fn = K delta^1.5 + beta delta^n delta_dot (thesis 3.5)."""
-    from camdyn.identification.impact_damping import estimate_impact_damping, residue_landscape
+    from camdyn.identification.impact_damping import (
+        estimate_impact_damping,
+        residue_landscape,
+    )
     from camdyn.io.measurements import read_measurement
 
-    system = _system(source, set_)
+    system = load_source(source, set_)
     records = [read_measurement(p) for p in data]
     speeds = _per_record(speed, len(records), "speed", lambda s: parse_speed(s))
     runouts = _per_record(runout, len(records), "runout", lambda s: parse_quantity(s, "m", "cam.runout"))
@@ -65,7 +67,7 @@ def identify_impact_damping(
     if json_out:
         out = est.to_dict()
         out["figures"] = figures
-        _print_json(out)
+        print_json(out)
         return
     table = Table("quantity", "value", "95 % bootstrap interval")
     ci = est.confidence
@@ -83,7 +85,6 @@ def identify_impact_damping(
         console.print(f"figure: {f}")
 
 
-@identify_app.command("restitution")
 def identify_restitution(
         source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         data: Path = typer.Argument(..., help="Record with alpha_ddot or a_t (forces not needed)."),
@@ -95,13 +96,13 @@ def identify_restitution(
     from camdyn.identification.restitution import estimate_restitution
     from camdyn.io.measurements import read_measurement
 
-    system = _system(source, set_)
+    system = load_source(source, set_)
     est = estimate_restitution(system, read_measurement(data), speed=parse_speed(speed) if speed else None)
     if plot is not None:
         from camdyn.plotting import plot_restitution
         plot_restitution(est, plot)
     if json_out:
-        _print_json(est.to_dict())
+        print_json(est.to_dict())
         return
     table = Table("quantity", "value")
     table.add_row("gamma", f"{est.gamma:.5g} s/m")

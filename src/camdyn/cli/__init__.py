@@ -1,0 +1,1 @@
+"""The ``camdyn`` command line."""

@@ -1,0 +1,1 @@
+"""Parameters: the system dataclasses, the law table, TOML configurations and presets."""

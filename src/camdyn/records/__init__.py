@@ -1,0 +1,1 @@
+"""Measured and synthetic records: the channel schema and synthetic measurements."""

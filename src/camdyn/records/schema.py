@@ -1,0 +1,108 @@
+"""The record schema: the channels a measured or synthetic record may hold, their SI
+units, and the checks every record passes (uniform sampling, finite and unclipped
+samples). Files are read and written by :mod:`camdyn.io.measurements`.
+
+A record is an :class:`xarray.Dataset` over ``time`` [s]; the channels are listed in
+:data:`CHANNEL_UNITS`. Optional metadata attributes: ``speed_hz`` [Hz], ``runout`` [m],
+``preset``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from camdyn.errors import DataError
+
+__all__ = ["CHANNEL_UNITS", "make_record", "check_sampling", "check_record", "angular_acceleration"]
+
+#: SI unit and long name of every channel a record may hold.
+CHANNEL_UNITS = {
+    "Nx": ("N", "pivot reaction on the follower, horizontal"),
+    "Ny": ("N", "pivot reaction on the follower, vertical"),
+    "alpha_ddot": ("rad/s^2", "follower angular acceleration"),
+    "a_t": ("m/s^2", "tangential acceleration at the accelerometer"),
+    "force": ("N", "impulse-hammer force (impulse tests)"),
+    "acceleration": ("m/s^2", "response acceleration (impulse tests)"),
+}
+def make_record(time, channels: dict, **attrs) -> xr.Dataset:
+    """Build a checked record from ``time`` [s] and ``{name: samples}`` in SI units."""
+    time = np.asarray(time, dtype=float)
+    data = {}
+    for name, values in channels.items():
+        if name not in CHANNEL_UNITS:
+            raise DataError(f"unknown channel {name!r}; known: {', '.join(CHANNEL_UNITS)}")
+        unit, long_name = CHANNEL_UNITS[name]
+        values = np.asarray(values, dtype=float)
+        if values.shape != time.shape:
+            raise DataError(f"channel {name} has {values.size} samples but time has {time.size}")
+        data[name] = ("time", values, {"units": unit, "long_name": long_name})
+    ds = xr.Dataset(data, coords={"time": ("time", time, {"units": "s", "long_name": "time"})})
+    ds.attrs.update({k: v for k, v in attrs.items() if v is not None})
+    check_sampling(ds)
+    return ds
+
+
+def check_sampling(ds: xr.Dataset) -> None:
+    t = ds["time"].values
+    if t.size < 16:
+        raise DataError(f"the record holds only {t.size} samples")
+    if not np.all(np.isfinite(t)):
+        raise DataError("the time column holds NaN or infinite values")
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.argmax(dt <= 0))
+        raise DataError(f"time does not increase at sample {i + 1} (t = {t[i + 1]:.6g} s)")
+    step = float(np.median(dt))
+    jumps = np.nonzero(np.abs(dt - step) > 1e-3 * step + 1e-12)[0]
+    if jumps.size:
+        i = int(jumps[0])
+        kind = "gap" if dt[i] > step else "irregular step"
+        raise DataError(f"sampling is not uniform: a {kind} of {dt[i]:.6g} s at t = {t[i]:.6g} s "
+                        f"(the usual step is {step:.6g} s); resample the record first")
+    ds.attrs["sample_rate"] = 1.0 / step
+
+
+def check_record(ds: xr.Dataset, channels=("Nx", "Ny", "alpha_ddot"), clip_run: int = 5) -> None:
+    """Refuse a record missing ``channels``, or holding NaN, infinite or clipped samples.
+
+    A channel counts as clipped when ``clip_run`` or more consecutive samples sit exactly
+    at its largest or smallest value, as a saturated amplifier or ADC leaves them (a
+    limit of exactly zero is exempt: a noise-free hammer force rests there).
+    """
+    for name in channels:
+        if name not in ds:
+            have = ", ".join(v for v in ds.data_vars) or "none"
+            raise DataError(f"the record has no {name} channel (it has: {have})")
+        x = ds[name].values
+        bad = ~np.isfinite(x)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise DataError(f"channel {name} holds {int(bad.sum())} NaN or infinite samples "
+                            f"(the first at t = {ds['time'].values[i]:.6g} s)")
+        for limit, word in ((x.max(), "upper"), (x.min(), "lower")):
+            at = np.concatenate(([0], (x == limit).astype(np.int8), [0]))
+            edges = np.diff(at)
+            runs = np.nonzero(edges == -1)[0] - np.nonzero(edges == 1)[0]
+            if runs.size and runs.max() >= clip_run and np.ptp(x) > 0 and limit != 0.0:
+                raise DataError(f"channel {name} looks clipped at its {word} limit {limit:.6g} "
+                                f"{ds[name].attrs.get('units', '')} ({int(runs.max())} consecutive samples)")
+
+
+def angular_acceleration(ds: xr.Dataset, sensor_distance: float | None = None) -> xr.Dataset:
+    """Add ``alpha_ddot = a_t / l_a`` [rad/s^2] when the record has only ``a_t``.
+
+    Parameters
+    ----------
+    sensor_distance : float
+        Accelerometer distance from the pivot ``l_a`` [m].
+    """
+    if "alpha_ddot" in ds or "a_t" not in ds:
+        return ds
+    if sensor_distance is None or not sensor_distance > 0:
+        raise DataError("the record gives the tangential acceleration a_t; the accelerometer distance "
+                        "follower.accelerometer_distance must be positive to convert it")
+    out = ds.copy()
+    unit, long_name = CHANNEL_UNITS["alpha_ddot"]
+    out["alpha_ddot"] = ("time", ds["a_t"].values / sensor_distance, {"units": unit, "long_name": long_name})
+    return out

@@ -1,0 +1,1 @@
+"""Simulations: time histories as xarray Datasets, and the instantaneous-impact map."""

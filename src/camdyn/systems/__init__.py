@@ -1,0 +1,1 @@
+"""The registry of hybrid systems the compiled integrator can run."""

@@ -1,0 +1,1 @@
+"""Test oracles: an independent SciPy implementation of the model."""
