@@ -1,8 +1,9 @@
 """Exception types of camdyn.
 
 Every error a user can cause by bad input is a subclass of :class:`CamdynError`,
-with a message a mechanical engineer can act on. The command-line interface
-prints these in one line and exits with status 2.
+with a message a mechanical engineer can act on. The command-line interface prints
+each in one line, without a traceback, and exits with status 2 for bad input and 1 for
+a failure at run time (:data:`RUNTIME_ERRORS`: the solver stopped, the disk filled up).
 """
 
 
@@ -43,3 +44,22 @@ class DataError(CamdynError, ValueError):
 
 class IdentificationError(CamdynError, RuntimeError):
     """An estimator refuses a record: its assumptions fail, or it has too little information."""
+
+
+class OutputError(CamdynError, OSError):
+    """An output file cannot be written: its folder is missing or read-only, or the disk
+    lacks the space the result needs (refused before the work starts)."""
+
+
+class StorageError(CamdynError, OSError):
+    """Writing a file failed at run time (the disk filled up, an I/O error); nothing was
+    written under the final name."""
+
+
+class SweepInterrupted(KeyboardInterrupt):
+    """A sweep was interrupted (Ctrl-C, SIGTERM); its finished chunks are saved and the
+    message says how to resume."""
+
+
+#: Errors that happen at run time on valid input (exit status 1 in the command line).
+RUNTIME_ERRORS = (SimulationError, StorageError)

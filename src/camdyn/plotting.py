@@ -10,18 +10,41 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
+from matplotlib.backend_bases import FigureCanvasBase  # noqa: E402
+
+from camdyn.errors import OutputError  # noqa: E402
+from camdyn.io.atomic import atomic_output  # noqa: E402
 
 
 def _label(da: xr.DataArray) -> str:
     return f"{da.attrs.get('long_name', da.name)} [{da.attrs.get('units', '-')}]"
 
 
+def figure_format(path: str | Path) -> str:
+    """The image format of a figure path, from its suffix (png, pdf, svg, ...).
+
+    Raises
+    ------
+    OutputError
+        If matplotlib cannot write that format; call this before a long computation.
+    """
+    suffix = Path(path).suffix.lower().lstrip(".")
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if suffix not in formats:
+        raise OutputError(f"cannot write the figure {path}: unknown image format {suffix or '(no suffix)'!r}; "
+                          f"use one of {', '.join(sorted(formats))}")
+    return suffix
+
+
 def _save(fig, path) -> Path:
     fig.tight_layout()
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    fmt = figure_format(path)
+    try:
+        with atomic_output(path) as tmp:
+            fig.savefig(tmp, dpi=110, format=fmt)
+    finally:
+        plt.close(fig)
     return path
 
 

@@ -26,9 +26,10 @@ from scipy.optimize import brentq
 from camdyn.errors import GeometryError, ParameterError
 from camdyn.model import layout as L
 from camdyn.model.dynamics import evaluate
-from camdyn.model.equilibrium import touch_angle
+from camdyn.model.equilibrium import static_equilibrium, touch_angle
 from camdyn.model.friction import friction_coefficient
 from camdyn.model.geometry import (
+    cam_angle,
     contact_kinematics,
     contact_point,
     contact_point_rate,
@@ -37,7 +38,7 @@ from camdyn.model.geometry import (
 from camdyn.model.outputs import pivot_reaction
 from camdyn.params.system import System
 
-__all__ = ["inverse_kinematics", "loss_of_contact_speed", "KinematicCheck", "check_regime"]
+__all__ = ["inverse_kinematics", "loss_of_contact_speed", "KinematicCheck", "check_regime", "contact_start"]
 
 
 @numba.njit(cache=True)
@@ -184,6 +185,52 @@ def loss_of_contact_speed(system: System, points: int = 1024, highest: float = 5
         if hi > highest:
             return math.inf
     return brentq(margin, lo, hi, xtol=1e-6, rtol=1e-10)
+
+
+def contact_start(system: System, speed: float | None = None) -> tuple[float, float] | None:
+    """A start on the permanent-contact motion at the cam's initial angle ``Theta0``.
+
+    :func:`camdyn.simulate` starts by default from rest at the static equilibrium at
+    ``Theta0`` (the thesis's initial condition, end of section 4.3). Where the rigid-contact
+    motion is fast at ``Theta0`` (the chapter 4 0-state, runout parallel to the follower, is
+    mid-lift, where ``alpha_dot`` is largest) the turning cam strikes the resting follower,
+    and near the loss-of-contact speed the follower can settle on an impacting motion
+    that coexists with the contact motion. This start avoids that: the rigid-contact
+    angle and rate at ``Theta0``, the angle lowered by the static compression
+    ``delta*/chi*`` so that the contact starts loaded.
+
+    Parameters
+    ----------
+    system : System
+        Constant cam motion.
+    speed : float, optional
+        Cam speed [Hz]; default ``system.motion.speed``.
+
+    Returns
+    -------
+    (float, float) or None
+        ``(alpha [rad], alpha_dot [rad/s])`` for ``simulate(..., initial_state=...)``, or
+        None when there is no permanent-contact motion to start on (oscillating cam motion,
+        a follower resting off the cam, or contact lost at this speed by inverse kinematics).
+    """
+    if system.motion.kind != "constant":
+        return None
+    if speed is not None:
+        system = system.with_values(**{"motion.speed": float(speed)})
+    eq = static_equilibrium(system)
+    try:
+        kept = eq.in_contact and bool(inverse_kinematics(system).attrs["contact_kept"])
+    except GeometryError:      # no rigid-contact angle at some cam angles
+        kept = False
+    if not kept:
+        return None
+    p = L.pack(system, initial_angle=eq.cam_angle)
+    theta, theta_dot = cam_angle(0.0, p)
+    a_k = touch_angle(p, theta)
+    # rigid contact keeps delta = 0: 0 = d delta/dt = -alpha_dot chi - n.v_cam, i.e. the
+    # delta_dot at alpha_dot = 0 divided by chi
+    _, delta_dot, chi = contact_kinematics(a_k, 0.0, theta, theta_dot, p)[:3]
+    return a_k - eq.penetration / chi, delta_dot / chi
 
 
 @dataclass(frozen=True)

@@ -1,68 +1,128 @@
 """The ``camdyn`` command line: the one place where every command is registered.
 
-Every input error prints one line, ``error: ...``, on standard error and exits with
-status 2 (no traceback).
+Every failure prints one line on standard error, without a traceback: exit status 2
+for bad input, 1 for a failure at run time, 130 for Ctrl-C and 143 for SIGTERM
+(:func:`main`).
 """
 
 from __future__ import annotations
 
+import functools
+import os
+import signal
 import sys
 
 import typer
 
 from camdyn.cli import analysis, impact, records, simulate, sweep
-from camdyn.errors import CamdynError
+from camdyn.errors import RUNTIME_ERRORS, CamdynError, SweepInterrupted
 
 try:  # recent typer vendors click
     from typer._click import exceptions as click_exceptions
 except ImportError:  # pragma: no cover
     from click import exceptions as click_exceptions
 
+#: The interrupt of the current command: its signal and, for a sweep, the exception that
+#: says how to resume (typer turns KeyboardInterrupt into exit status 130 and drops it).
+_interrupt = {"signal": signal.SIGINT, "exception": None}
+
+
+def _interruptible(command):
+    """Register ``command`` so that an interrupt's message survives typer."""
+    @functools.wraps(command)
+    def wrapper(*args, **kwargs):
+        try:
+            return command(*args, **kwargs)
+        except KeyboardInterrupt as exc:
+            _interrupt["exception"] = exc
+            raise
+    return wrapper
+
+
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Nonlinear dynamics of cam-follower systems with rolling-sliding contact.")
 presets_app = typer.Typer(help="List and show bundled parameter presets.", invoke_without_command=True)
 identify_app = typer.Typer(help="Estimate model parameters from measured records.", no_args_is_help=True)
 
-presets_app.callback()(simulate.presets_list)
-presets_app.command("show")(simulate.presets_show)
-presets_app.command("keys")(simulate.presets_keys)
+presets_app.callback()(_interruptible(simulate.presets_list))
+presets_app.command("show")(_interruptible(simulate.presets_show))
+presets_app.command("keys")(_interruptible(simulate.presets_keys))
 app.add_typer(presets_app, name="presets")
-app.command("equilibrium")(simulate.equilibrium)
-app.command("simulate")(simulate.simulate)
-app.command("demo")(simulate.demo)
-app.command("synthesize")(records.synthesize)
-app.command("synthesize-impulse")(records.synthesize_impulse)
-identify_app.command("friction")(records.identify_friction)
-identify_app.command("modal-damping")(records.identify_modal)
-identify_app.command("impact-damping")(impact.identify_impact_damping)
-identify_app.command("restitution")(impact.identify_restitution)
+app.command("equilibrium")(_interruptible(simulate.equilibrium))
+app.command("simulate")(_interruptible(simulate.simulate))
+app.command("demo")(_interruptible(simulate.demo))
+app.command("synthesize")(_interruptible(records.synthesize))
+app.command("synthesize-impulse")(_interruptible(records.synthesize_impulse))
+identify_app.command("friction")(_interruptible(records.identify_friction))
+identify_app.command("modal-damping")(_interruptible(records.identify_modal))
+identify_app.command("impact-damping")(_interruptible(impact.identify_impact_damping))
+identify_app.command("restitution")(_interruptible(impact.identify_restitution))
 app.add_typer(identify_app, name="identify")
-app.command("tribology")(records.tribology)
-app.command("design")(records.design)
-app.command("sweep")(sweep.sweep)
-app.command("bifurcation")(sweep.bifurcation)
-app.command("lyapunov")(sweep.lyapunov)
-app.command("map")(analysis.regime_map_command)
-app.command("spectrum")(analysis.spectrum)
+app.command("tribology")(_interruptible(records.tribology))
+app.command("design")(_interruptible(records.design))
+app.command("sweep")(_interruptible(sweep.sweep))
+app.command("bifurcation")(_interruptible(sweep.bifurcation))
+app.command("lyapunov")(_interruptible(sweep.lyapunov))
+app.command("map")(_interruptible(analysis.regime_map_command))
+app.command("spectrum")(_interruptible(analysis.spectrum))
+
+
+def _on_terminate(signum, frame):
+    """SIGTERM: stop as Ctrl-C does (workers stopped, checkpoints kept), exit status 143."""
+    _interrupt["signal"] = signal.SIGTERM
+    raise KeyboardInterrupt
+
+
+def _interrupted(exc: BaseException | None) -> int:
+    exc = exc or _interrupt["exception"]
+    reason = str(exc) if isinstance(exc, SweepInterrupted) else "interrupted"
+    print(reason, file=sys.stderr)
+    return 128 + int(_interrupt["signal"])
 
 
 def main(argv=None) -> int:
-    """Entry point: run the app, turning input errors into one line and exit status 2."""
+    """Entry point: run the app and turn every failure into one line on standard error.
+
+    Returns the exit status: 0 success; 2 bad input (a camdyn input error or a usage
+    error); 1 a failure at run time (the solver stopped, a write failed, an unexpected
+    error); 130 interrupted by Ctrl-C (143 by SIGTERM). Set ``CAMDYN_DEBUG=1`` to see the
+    traceback of an unexpected error.
+    """
+    _interrupt.update(signal=signal.SIGINT, exception=None)
     try:
-        app(args=argv, standalone_mode=False, prog_name="camdyn")
+        previous = signal.signal(signal.SIGTERM, _on_terminate)
+    except ValueError:   # not the main thread: leave SIGTERM alone
+        previous = None
+    try:
+        result = app(args=argv, standalone_mode=False, prog_name="camdyn")
+    except typer.Abort as exc:
+        return _interrupted(exc.__cause__)
+    except KeyboardInterrupt as exc:
+        return _interrupted(exc)
+    except RUNTIME_ERRORS as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
     except CamdynError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except click_exceptions.UsageError as exc:
         print(f"error: {exc.format_message()}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("aborted", file=sys.stderr)
-        return 1
     except OSError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    return 0
+        print(f"error: {exc.strerror or exc}{f' ({exc.filename})' if exc.filename else ''}", file=sys.stderr)
+        return 1
+    except Exception as exc:  # noqa: BLE001 - the promise is one line, never a traceback
+        if os.environ.get("CAMDYN_DEBUG"):
+            raise
+        print(f"error: unexpected {type(exc).__name__}: {exc} (set CAMDYN_DEBUG=1 for the traceback)",
+              file=sys.stderr)
+        return 1
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+    if result == 130:   # typer's exit status for KeyboardInterrupt
+        return _interrupted(None)
+    return result if isinstance(result, int) else 0
 
 
 if __name__ == "__main__":  # pragma: no cover

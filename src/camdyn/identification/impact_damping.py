@@ -153,6 +153,115 @@ def _beta(u, reference):
     return math.exp(u[0]) / reference ** u[1]
 
 
+def _objective(residue: str | None, exponent: float | None) -> str:
+    """The residue to minimise (default by whether ``n`` is fixed), after checking the
+    arguments of :func:`estimate_impact_damping`."""
+    if residue is None:
+        residue = "lambda1" if exponent is not None else "combined"
+    if residue not in OBJECTIVES:
+        raise ParameterError(f"residue must be one of {', '.join(OBJECTIVES)}, got {residue!r}")
+    if exponent is not None and not (math.isfinite(exponent) and 0 <= exponent <= 5):
+        raise ParameterError(f"the fixed exponent n must be between 0 and 5, got {exponent!r}")
+    return residue
+
+
+def _record_events(base, records, speed, runout, min_impacts: int, progress) -> list[ImpactEvents]:
+    """Reconstruct the impact events of each record.
+
+    Parameters
+    ----------
+    base : System
+        The rig with the power-law damping.
+    records : Dataset or list of Dataset
+        The records.
+    speed, runout : float or list, optional
+        Cam speed [Hz] and runout [m], scalars or one per record; a record's own
+        ``runout`` attribute when None.
+    min_impacts : int
+        Fewest impact events per record [-].
+    progress : callable, optional
+        Called with a message after each record.
+
+    Returns
+    -------
+    list of ImpactEvents
+    """
+    if isinstance(records, xr.Dataset):
+        records = [records]
+    n_rec = len(records)
+    speeds = speed if isinstance(speed, (list, tuple)) else [speed] * n_rec
+    runouts = runout if isinstance(runout, (list, tuple)) else [runout] * n_rec
+    events = []
+    for rec, sp, ro in zip(records, speeds, runouts):
+        ro = ro if ro is not None else rec.attrs.get("runout")
+        sys_r = base.with_values(**{"cam.runout": float(ro)}) if ro is not None else base
+        events.append(impact_events(sys_r, rec, speed=sp, min_impacts=min_impacts))
+        if progress:
+            progress(f"record {len(events)}/{n_rec}: {events[-1].count} impacts")
+    return events
+
+
+class _Residuals:
+    """Residue vectors of the fit in the unknowns ``u = (log c_ref, n)`` (or ``log c_ref``
+    alone with ``n`` fixed), ``c_ref`` [N s/m] being the damping at the reference
+    penetration ``reference`` [m]."""
+
+    def __init__(self, prob: ImpactProblem, reference: float, exponent: float | None, residue: str):
+        self.prob, self.reference, self.exponent, self.residue = prob, reference, exponent, residue
+
+    def __call__(self, u_rows, impacts=None):
+        """Residue vectors for several parameter rows at once: (rows, K or K*M)."""
+        prob, residue = self.prob, self.residue
+        u_rows = np.atleast_2d(u_rows)
+        idx = np.arange(prob.count) if impacts is None else impacts
+        jobs = np.tile(idx, len(u_rows))
+        rows = np.repeat(np.arange(len(u_rows)), idx.size)
+        n_val = u_rows[rows, 1] if u_rows.shape[1] > 1 else np.full(jobs.size, self.exponent)
+        beta = np.exp(u_rows[rows, 0]) / self.reference ** n_val
+        res = prob.residues(jobs, beta, n_val)
+        if residue in ("lambda2", "combined"):
+            f = np.nan_to_num(res["force"]) - np.nan_to_num(prob.force[jobs])
+            val = f * np.sqrt(prob.tau[jobs] / prob.force_energy[jobs])[:, None]
+            if residue == "combined":
+                val = np.column_stack([res["lambda1"], val])
+            return val.reshape(len(u_rows), -1)
+        return res[residue].reshape(len(u_rows), idx.size)
+
+    def single(self, u):
+        """The residue vector at one parameter row ``u``."""
+        return self(u)[0]
+
+    def jacobian(self, u):
+        """Forward-difference Jacobian of :meth:`single` at ``u``."""
+        h = np.array([0.01, 0.002])[: u.size]
+        rows_ = np.vstack([u] + [u + h[j] * np.eye(u.size)[j] for j in range(u.size)])
+        r = self(rows_)
+        return ((r[1:] - r[0]) / h[:, None]).T
+
+
+def _coarse_scan(vector: _Residuals, exponent: float | None) -> np.ndarray:
+    """Starting point of the least-squares fit: the best of a coarse scan of the damping
+    at the reference penetration (1 to 1e6 N s/m; ``n`` at 1.5 when free).
+
+    Returns
+    -------
+    ndarray
+        ``u`` (see :class:`_Residuals`).
+    """
+    n_start = 1.5 if exponent is None else exponent
+    scan = np.log(np.logspace(0, 6, 25))
+    rows = np.column_stack([scan, np.full(scan.size, n_start)]) if exponent is None else scan[:, None]
+    cost = np.nansum(np.nan_to_num(vector(rows), nan=1.0, posinf=1e3) ** 2, axis=1)
+    u0 = rows[int(np.argmin(cost))]
+    return u0
+
+
+def _interval(x: np.ndarray) -> tuple[float, float]:
+    """95 % interval of bootstrap replicates ``x`` (NaN without replicates)."""
+    return (float(np.nanpercentile(x, 2.5)), float(np.nanpercentile(x, 97.5))) if x.size else (
+        math.nan, math.nan)
+
+
 def estimate_impact_damping(system, records, speed=None, runout=None, exponent: float | None = None,
                             residue: str | None = None, bootstrap: int = 64, seed: int | None = 0,
                             min_impacts: int = 5, events: list[ImpactEvents] | None = None,
@@ -186,26 +295,10 @@ def estimate_impact_damping(system, records, speed=None, runout=None, exponent: 
         A record the estimator must refuse (see :func:`impact_events`), or no damping
         that reproduces the measured swings.
     """
-    if residue is None:
-        residue = "lambda1" if exponent is not None else "combined"
-    if residue not in OBJECTIVES:
-        raise ParameterError(f"residue must be one of {', '.join(OBJECTIVES)}, got {residue!r}")
-    if exponent is not None and not (math.isfinite(exponent) and 0 <= exponent <= 5):
-        raise ParameterError(f"the fixed exponent n must be between 0 and 5, got {exponent!r}")
+    residue = _objective(residue, exponent)
     base = system.with_values(**{"contact.damping": "power"})
     if events is None:
-        if isinstance(records, xr.Dataset):
-            records = [records]
-        n_rec = len(records)
-        speeds = speed if isinstance(speed, (list, tuple)) else [speed] * n_rec
-        runouts = runout if isinstance(runout, (list, tuple)) else [runout] * n_rec
-        events = []
-        for rec, sp, ro in zip(records, speeds, runouts):
-            ro = ro if ro is not None else rec.attrs.get("runout")
-            sys_r = base.with_values(**{"cam.runout": float(ro)}) if ro is not None else base
-            events.append(impact_events(sys_r, rec, speed=sp, min_impacts=min_impacts))
-            if progress:
-                progress(f"record {len(events)}/{n_rec}: {events[-1].count} impacts")
+        events = _record_events(base, records, speed, runout, min_impacts, progress)
     else:
         events = [replace(e, system=e.system.with_values(**{"contact.damping": "power"})) for e in events]
     prob = ImpactProblem(events)
@@ -214,43 +307,12 @@ def estimate_impact_damping(system, records, speed=None, runout=None, exponent: 
     if not (math.isfinite(reference) and reference > 0):
         reference = 1e-5
     mode = "free" if exponent is None else ("viscous" if exponent == 0 else "fixed")
-
-    def vector(u_rows, impacts=None):
-        """Residue vectors for several parameter rows at once: (rows, K or K*M)."""
-        u_rows = np.atleast_2d(u_rows)
-        idx = np.arange(k) if impacts is None else impacts
-        jobs = np.tile(idx, len(u_rows))
-        rows = np.repeat(np.arange(len(u_rows)), idx.size)
-        n_val = u_rows[rows, 1] if u_rows.shape[1] > 1 else np.full(jobs.size, exponent)
-        beta = np.exp(u_rows[rows, 0]) / reference ** n_val
-        res = prob.residues(jobs, beta, n_val)
-        if residue in ("lambda2", "combined"):
-            f = np.nan_to_num(res["force"]) - np.nan_to_num(prob.force[jobs])
-            val = f * np.sqrt(prob.tau[jobs] / prob.force_energy[jobs])[:, None]
-            if residue == "combined":
-                val = np.column_stack([res["lambda1"], val])
-            return val.reshape(len(u_rows), -1)
-        return res[residue].reshape(len(u_rows), idx.size)
-
-    # coarse scan of the damping at the reference penetration, then least squares
-    n_start = 1.5 if exponent is None else exponent
-    scan = np.log(np.logspace(0, 6, 25))
-    rows = np.column_stack([scan, np.full(scan.size, n_start)]) if exponent is None else scan[:, None]
-    cost = np.nansum(np.nan_to_num(vector(rows), nan=1.0, posinf=1e3) ** 2, axis=1)
-    u0 = rows[int(np.argmin(cost))]
+    vector = _Residuals(prob, reference, exponent, residue)
+    u0 = _coarse_scan(vector, exponent)   # then least squares
     if progress:
         progress("coarse scan done")
-
-    def fun(u):
-        return vector(u)[0]
-
-    def jac(u):
-        h = np.array([0.01, 0.002])[: u.size]
-        rows_ = np.vstack([u] + [u + h[j] * np.eye(u.size)[j] for j in range(u.size)])
-        r = vector(rows_)
-        return ((r[1:] - r[0]) / h[:, None]).T
-
-    sol = least_squares(fun, u0, jac=jac, method="lm", xtol=1e-12, ftol=1e-14, max_nfev=200)
+    sol = least_squares(vector.single, u0, jac=vector.jacobian, method="lm", xtol=1e-12, ftol=1e-14,
+                        max_nfev=200)
     u = sol.x
     n_hat = float(u[1]) if exponent is None else float(exponent)
     beta_hat = math.exp(u[0]) / reference ** n_hat
@@ -262,14 +324,12 @@ def estimate_impact_damping(system, records, speed=None, runout=None, exponent: 
         progress("fit done")
     peaks = np.nanmax(res["penetration"], axis=1)
     peak_pen = float(np.nanmedian(peaks))
-    boot = _bootstrap(vector, jac, u, prob.record, bootstrap, seed, reference, exponent)
+    boot = _bootstrap(vector, vector.jacobian, u, prob.record, bootstrap, seed, reference, exponent)
     if progress and bootstrap:
         progress("bootstrap done")
     betas = boot[:, 0]
     ns = boot[:, 1]
     c_peak = betas * peak_pen ** ns
-    ci = lambda x: (float(np.nanpercentile(x, 2.5)), float(np.nanpercentile(x, 97.5))) if x.size else (
-        math.nan, math.nan)
     per = {"lambda1": res["lambda1"], "lambda2": res["lambda2"], "lambda3": res["lambda3"],
            "peak_penetration": peaks, "record": prob.record,
            "beta_alone": _per_impact_beta(prob, n_hat, beta_hat), "approach_velocity": _approach(prob)}
@@ -278,7 +338,7 @@ def estimate_impact_damping(system, records, speed=None, runout=None, exponent: 
         residues={r: float(np.nanmean(np.abs(res[r]))) for r in RESIDUES},
         impacts_used=k, records=len(events), damping_at_peak=beta_hat * peak_pen ** n_hat,
         peak_penetration=peak_pen,
-        confidence={"beta": ci(betas), "n": ci(ns), "damping_at_peak": ci(c_peak)},
+        confidence={"beta": _interval(betas), "n": _interval(ns), "damping_at_peak": _interval(c_peak)},
         bootstrap=boot, per_impact=per, problem=prob)
 
 

@@ -251,6 +251,125 @@ def _reconstruct(acc, k0, k1, lead0, lead1, tau):
     return u, v, x, length, -mean
 
 
+def _record_speed(record: xr.Dataset, speed: float | None) -> float:
+    """Cam speed [Hz]: ``speed`` if given, else the record's ``speed_hz`` attribute."""
+    if speed is None:
+        if "speed_hz" not in record.attrs:
+            raise ParameterError("give the cam speed: the record has no speed_hz metadata")
+        speed = float(record.attrs["speed_hz"])
+    speed = float(speed)
+    if not (math.isfinite(speed) and speed > 0):
+        raise ParameterError(f"the cam speed must be positive, got {speed!r} Hz")
+    return speed
+
+
+def _periodic_contacts(t: np.ndarray, acc: np.ndarray, speed: float, min_impacts: int,
+                       min_contact_samples: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """The contact windows of a record with one periodic impact per revolution.
+
+    Parameters
+    ----------
+    t : ndarray
+        Sample times [s], equally spaced.
+    acc : ndarray
+        ``alpha_ddot`` [rad/s^2] at ``t``.
+    speed : float
+        Cam speed [Hz].
+    min_impacts, min_contact_samples : int
+        As in :func:`impact_events`.
+
+    Returns
+    -------
+    starts, stops : ndarray of int
+        Contact windows (sample indices, stop exclusive), see :func:`detect_contacts`.
+    noise : float
+        Noise level of ``acc`` [rad/s^2].
+
+    Raises
+    ------
+    IdentificationError
+        No periodic impacts, more than one per revolution, too few, or contacts the
+        sampling does not resolve.
+    """
+    tau = float(t[1] - t[0])
+    rate = 1.0 / tau
+    period = 1.0 / speed
+    starts, stops, noise = detect_contacts(acc, rate, period)
+    revolutions = (t[-1] - t[0] + tau) * speed
+    if starts.size < 2:
+        raise IdentificationError(f"found {starts.size} impact(s) in {revolutions:.3g} revolutions: "
+                                  "the record shows no periodic impacts")
+    per_rev = starts.size / revolutions
+    intervals = np.diff(starts) * tau / period
+    if per_rev > 1.3 or np.median(intervals) < 0.75:
+        raise IdentificationError(
+            f"{per_rev:.2f} impacts per revolution (median interval {np.median(intervals):.3g} cam periods): "
+            "the estimator needs exactly one impact per revolution; change the speed or runout")
+    spread = float(intervals.max() - intervals.min())
+    if spread > PERIODIC_SPREAD or abs(np.median(intervals) - 1.0) > PERIODIC_SPREAD:
+        raise IdentificationError(
+            f"the impacts are not periodic: the intervals between impacts range over "
+            f"{intervals.min():.4f}-{intervals.max():.4f} cam periods (allowed spread {PERIODIC_SPREAD:g}); "
+            "the motion is period-doubled, quasi-periodic or chaotic, or the speed is wrong")
+    count = starts.size - 1
+    if count < min_impacts:
+        raise IdentificationError(f"only {count} complete impact events (need at least {min_impacts}); "
+                                  "record more revolutions")
+    contact_samples = stops[:-1] - starts[:-1]
+    if min_contact_samples and np.median(contact_samples) < min_contact_samples:
+        need = min_contact_samples / (np.median(contact_samples) * tau)
+        raise IdentificationError(
+            f"the sampling rate {rate:.6g} Hz is too low to resolve the contact: impacts span "
+            f"{int(np.median(contact_samples))} samples, the estimator needs {min_contact_samples} "
+            f"(about {need:.3g} Hz or more)")
+    return starts, stops, noise
+
+
+def _event_motion(p: np.ndarray, acc: np.ndarray, k0: int, k1: int, stop: int, lead0: float, lead1: float,
+                  tau: float):
+    """Reconstruct the follower's motion over one impact event (steps 1-3 of the module).
+
+    Parameters
+    ----------
+    p : ndarray
+        Parameter vector (:mod:`camdyn.model.layout`).
+    acc : ndarray
+        The record's ``alpha_ddot`` [rad/s^2].
+    k0, k1 : int
+        First samples of this contact and of the next one.
+    stop : int
+        End of this contact (sample index, exclusive).
+    lead0, lead1 : float
+        Times [s] by which the onsets precede samples ``k0`` and ``k1``.
+    tau : float
+        Sample interval [s].
+
+    Returns
+    -------
+    values : dict
+        The event's scalars, named as the fields of :class:`ImpactEvents` (``length`` and
+        ``contact`` for ``event_length`` and ``contact_length``).
+    u : ndarray
+        Offsets of samples ``k0 .. k1-1`` from the onset [s].
+    v, alpha : ndarray
+        Follower rate [rad/s] and angle [rad] there.
+    """
+    u, v, x, length, alpha_dot0 = _reconstruct(acc, k0, k1, lead0, lead1, tau)
+    k_end = min(stop - k0, x.size - 3)
+    # the return-time map starts a tenth of the flight after the detected end of
+    # contact: a heavily damped contact ends with a long low-force tail that the
+    # detection cannot see, and the map needs a state in true free flight
+    k_free = k_end + (x.size - k_end) // 10
+    c = _angle_constant(p, x[k_free], v[k_free], length - u[k_free])
+    alpha = x + c
+    direction = 1.0 if v[k_end] >= 0 else -1.0
+    theta0, alpha0 = onset_cam_angle(p, c, alpha_dot0, p[L.OMEGA])
+    alpha = alpha + (alpha0 - c)
+    values = {"alpha0": alpha0, "alpha0_map": c, "alpha_dot0": alpha_dot0, "alpha_ddot0": _free_before(acc, k0),
+              "theta0": theta0, "peak": _peak(alpha[k_end:], direction), "length": length, "contact": u[k_end]}
+    return values, u, v, alpha
+
+
 def impact_events(system: System, record: xr.Dataset, speed: float | None = None, min_impacts: int = 5,
                   min_contact_samples: int = 8, need_forces: bool = True) -> ImpactEvents:
     """Cut a periodic-impact record into impact events and reconstruct each (thesis 3.5.1).
@@ -282,52 +401,18 @@ def impact_events(system: System, record: xr.Dataset, speed: float | None = None
         raise ParameterError("the impact estimators need constant cam motion")
     record = angular_acceleration(record, system.follower.sensor_distance)
     check_record(record, ("Nx", "Ny", "alpha_ddot") if need_forces else ("alpha_ddot",))
-    if speed is None:
-        if "speed_hz" not in record.attrs:
-            raise ParameterError("give the cam speed: the record has no speed_hz metadata")
-        speed = float(record.attrs["speed_hz"])
-    speed = float(speed)
-    if not (math.isfinite(speed) and speed > 0):
-        raise ParameterError(f"the cam speed must be positive, got {speed!r} Hz")
+    speed = _record_speed(record, speed)
     system = system.with_values(**{"motion.speed": speed})
     p = L.pack(system)
     t = record["time"].values
     tau = float(t[1] - t[0])
-    rate = 1.0 / tau
-    period = 1.0 / speed
     acc = record["alpha_ddot"].values.astype(float)
-    starts, stops, noise = detect_contacts(acc, rate, period)
-    revolutions = (t[-1] - t[0] + tau) * speed
-    if starts.size < 2:
-        raise IdentificationError(f"found {starts.size} impact(s) in {revolutions:.3g} revolutions: "
-                                  "the record shows no periodic impacts")
-    per_rev = starts.size / revolutions
-    intervals = np.diff(starts) * tau / period
-    if per_rev > 1.3 or np.median(intervals) < 0.75:
-        raise IdentificationError(
-            f"{per_rev:.2f} impacts per revolution (median interval {np.median(intervals):.3g} cam periods): "
-            "the estimator needs exactly one impact per revolution; change the speed or runout")
-    spread = float(intervals.max() - intervals.min())
-    if spread > PERIODIC_SPREAD or abs(np.median(intervals) - 1.0) > PERIODIC_SPREAD:
-        raise IdentificationError(
-            f"the impacts are not periodic: the intervals between impacts range over "
-            f"{intervals.min():.4f}-{intervals.max():.4f} cam periods (allowed spread {PERIODIC_SPREAD:g}); "
-            "the motion is period-doubled, quasi-periodic or chaotic, or the speed is wrong")
+    starts, stops, noise = _periodic_contacts(t, acc, speed, min_impacts, min_contact_samples)
     count = starts.size - 1
-    if count < min_impacts:
-        raise IdentificationError(f"only {count} complete impact events (need at least {min_impacts}); "
-                                  "record more revolutions")
-    contact_samples = stops[:-1] - starts[:-1]
-    if min_contact_samples and np.median(contact_samples) < min_contact_samples:
-        need = min_contact_samples / (np.median(contact_samples) * tau)
-        raise IdentificationError(
-            f"the sampling rate {rate:.6g} Hz is too low to resolve the contact: impacts span "
-            f"{int(np.median(contact_samples))} samples, the estimator needs {min_contact_samples} "
-            f"(about {need:.3g} Hz or more)")
     nx = record["Nx"].values if need_forces else None
     ny = record["Ny"].values if need_forces else None
     theta_dot = p[L.OMEGA]
-    width = int(contact_samples.max()) + 2
+    width = int((stops[:-1] - starts[:-1]).max()) + 2
     offsets = np.full((count, width), np.nan)
     force = np.full((count, width), np.nan)
     pen = np.full((count, width), np.nan)
@@ -336,29 +421,14 @@ def impact_events(system: System, record: xr.Dataset, speed: float | None = None
     alphas, rates = [], []
     leads = np.array([_onset_lead(acc, k, tau) for k in starts])
     for i in range(count):
-        k0, k1 = starts[i], starts[i + 1]
-        u, v, x, length, alpha_dot0 = _reconstruct(acc, k0, k1, leads[i], leads[i + 1], tau)
-        k_end = min(stops[i] - k0, x.size - 3)
-        # the return-time map starts a tenth of the flight after the detected end of
-        # contact: a heavily damped contact ends with a long low-force tail that the
-        # detection cannot see, and the map needs a state in true free flight
-        k_free = k_end + (x.size - k_end) // 10
-        c = _angle_constant(p, x[k_free], v[k_free], length - u[k_free])
-        alpha = x + c
-        direction = 1.0 if v[k_end] >= 0 else -1.0
-        theta0, alpha0 = onset_cam_angle(p, c, alpha_dot0, theta_dot)
-        alpha = alpha + (alpha0 - c)
-        fields["alpha0"][i] = alpha0
-        fields["alpha0_map"][i] = c
-        fields["alpha_dot0"][i] = alpha_dot0
-        fields["alpha_ddot0"][i] = _free_before(acc, k0)
-        fields["theta0"][i] = theta0
-        fields["peak"][i] = _peak(alpha[k_end:], direction)
-        fields["length"][i] = length
-        fields["contact"][i] = u[k_end]
+        k0 = starts[i]
+        values, u, v, alpha = _event_motion(p, acc, k0, starts[i + 1], stops[i], leads[i], leads[i + 1], tau)
+        for name, value in values.items():
+            fields[name][i] = value
+        # step 4: penetration and contact force over the contact
         nc = min(stops[i] - k0 + 1, u.size)
         offsets[i, :nc] = u[:nc]
-        thetas = theta0 + theta_dot * u[:nc]
+        thetas = values["theta0"] + theta_dot * u[:nc]
         pen[i, :nc] = [contact_kinematics(alpha[k], v[k], thetas[k], theta_dot, p)[0] for k in range(nc)]
         if need_forces:
             fn, _ = contact_forces_from_reaction(alpha[:nc], v[:nc], acc[k0:k0 + nc], nx[k0:k0 + nc],

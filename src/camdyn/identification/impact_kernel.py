@@ -102,6 +102,107 @@ def return_time(alpha_start, alpha_dot_start, alpha_target, p, step, t_max):
     return math.nan
 
 
+@numba.njit(cache=True)
+def _output_times(offsets, t_end, grid_points):
+    """Output times of one job, sorted: a uniform grid over the event and the wanted offsets.
+
+    Parameters
+    ----------
+    offsets : ndarray (M,)
+        Times after onset [s] at which force and penetration are wanted (NaN padded).
+    t_end : float
+        Length of the event [s].
+    grid_points : int
+        Samples of the uniform grid [-].
+
+    Returns
+    -------
+    t_sorted : ndarray
+        The grid and the offsets (clipped to the event) in increasing order [s].
+    order : ndarray of int
+        Position of each sorted time before sorting: below ``grid_points`` a grid
+        sample, else ``grid_points`` plus the offset's column.
+    """
+    m = offsets.shape[0]
+    wanted = 0
+    for c in range(m):
+        if math.isfinite(offsets[c]):
+            wanted += 1
+    n = grid_points + wanted
+    t_out = np.empty(n)
+    for g in range(grid_points):
+        t_out[g] = t_end * g / (grid_points - 1)
+    for c in range(wanted):
+        t_out[grid_points + c] = min(max(offsets[c], 0.0), t_end)
+    order = np.argsort(t_out, kind="mergesort")
+    return t_out[order], order
+
+
+@numba.njit(cache=True)
+def _separation(events, t_end):
+    """Time of the first separation [s] in an event log (NaN if none), and of the next
+    contact onset after it (``t_end + 1`` [s] if none)."""
+    t_sep = math.nan
+    t_next = t_end + 1.0
+    for e in range(events.shape[0]):
+        if events[e, 1] == 0.0 and events[e, 2] < 0.0 and not math.isfinite(t_sep):
+            t_sep = events[e, 0]
+        elif events[e, 1] == 0.0 and events[e, 2] > 0.0 and math.isfinite(t_sep):
+            t_next = events[e, 0]
+            break
+    return t_sep, t_next
+
+
+@numba.njit(cache=True)
+def _contact_outputs(q, t_sorted, y, modes, order, grid_points, force, penetration):
+    """Fill ``force`` [N] and ``penetration`` [m] (one job's rows) at the wanted offsets
+    from the simulated states ``y`` and ``modes`` at ``t_sorted`` [s]."""
+    for r in range(t_sorted.shape[0]):
+        c = order[r] - grid_points
+        if c >= 0:
+            res = evaluate(t_sorted[r], y[r, 0], y[r, 1], modes[r], q)
+            force[c] = res[1]
+            penetration[c] = res[5]
+
+
+@numba.njit(cache=True)
+def _flight_peak(t_sorted, y, order, grid_points, t_sep, t_next):
+    """Extreme follower angle [rad] in the free flight between ``t_sep`` and ``t_next``
+    [s], in the direction of separation, from the grid samples refined by a parabola.
+
+    Returns
+    -------
+    found : bool
+        False when no grid sample lies in the flight.
+    peak : float
+        The extreme angle [rad].
+    """
+    n = t_sorted.shape[0]
+    direction = 1.0
+    best = -1
+    best_val = -np.inf
+    for r in range(n):
+        if order[r] < grid_points and t_sep < t_sorted[r] < t_next:
+            if best < 0:
+                direction = 1.0 if y[r, 1] >= 0.0 else -1.0
+            val = direction * y[r, 0]
+            if val > best_val:
+                best_val = val
+                best = r
+    if best < 0:
+        return False, math.nan
+    # parabola through the neighbouring grid samples
+    lo = best - 1
+    while lo >= 0 and order[lo] >= grid_points:
+        lo -= 1
+    hi = best + 1
+    while hi < n and order[hi] >= grid_points:
+        hi += 1
+    if lo >= 0 and hi < n:
+        best_val = parabola_peak(direction * y[lo, 0], best_val, direction * y[hi, 0])
+    return True, direction * best_val
+
+
 @numba.njit(parallel=True, cache=True)
 def simulate_impacts(params, impact, beta, exponent, alpha0, alpha_dot0, t_end, offsets, grid_points,
                      rtol, atol, h_max):
@@ -151,18 +252,7 @@ def simulate_impacts(params, impact, beta, exponent, alpha0, alpha_dot0, t_end, 
         q = params[i].copy()
         q[L.BETA] = beta[j]
         q[L.EXPONENT] = exponent[j]
-        wanted = 0
-        for c in range(m):
-            if math.isfinite(offsets[i, c]):
-                wanted += 1
-        n = grid_points + wanted
-        t_out = np.empty(n)
-        for g in range(grid_points):
-            t_out[g] = t_end[i] * g / (grid_points - 1)
-        for c in range(wanted):
-            t_out[grid_points + c] = min(max(offsets[i, c], 0.0), t_end[i])
-        order = np.argsort(t_out, kind="mergesort")
-        t_sorted = t_out[order]
+        t_sorted, order = _output_times(offsets[i], t_end[i], grid_points)
         y0 = np.array([alpha0[i], alpha_dot0[i], 0.0])
         y, modes, events, counters = driver.integrate(
             systems.CAM_FOLLOWER, q, y0, 0.0, t_end[i], t_sorted, rtol, atol, h_max,
@@ -170,48 +260,15 @@ def simulate_impacts(params, impact, beta, exponent, alpha0, alpha_dot0, t_end, 
         status[j] = counters[driver.COUNT_STATUS]
         if status[j] != 0:
             continue
-        t_sep = math.nan
-        t_next = t_end[i] + 1.0
-        for e in range(events.shape[0]):
-            if events[e, 1] == 0.0 and events[e, 2] < 0.0 and not math.isfinite(t_sep):
-                t_sep = events[e, 0]
-            elif events[e, 1] == 0.0 and events[e, 2] > 0.0 and math.isfinite(t_sep):
-                t_next = events[e, 0]
-                break
+        t_sep, t_next = _separation(events, t_end[i])
         if not math.isfinite(t_sep):
             status[j] = STATUS_NO_SEPARATION
             continue
         separation[j] = t_sep
-        # forces and penetration at the wanted offsets
-        for r in range(n):
-            c = order[r] - grid_points
-            if c >= 0:
-                res = evaluate(t_sorted[r], y[r, 0], y[r, 1], modes[r], q)
-                force[j, c] = res[1]
-                penetration[j, c] = res[5]
-        # extreme angle in free flight, in the direction of separation
-        direction = 1.0
-        best = -1
-        best_val = -np.inf
-        for r in range(n):
-            if order[r] < grid_points and t_sep < t_sorted[r] < t_next:
-                if best < 0:
-                    direction = 1.0 if y[r, 1] >= 0.0 else -1.0
-                val = direction * y[r, 0]
-                if val > best_val:
-                    best_val = val
-                    best = r
-        if best < 0:
+        _contact_outputs(q, t_sorted, y, modes, order, grid_points, force[j], penetration[j])
+        found, value = _flight_peak(t_sorted, y, order, grid_points, t_sep, t_next)
+        if not found:
             status[j] = STATUS_NO_SEPARATION
             continue
-        # parabola through the neighbouring grid samples
-        lo = best - 1
-        while lo >= 0 and order[lo] >= grid_points:
-            lo -= 1
-        hi = best + 1
-        while hi < n and order[hi] >= grid_points:
-            hi += 1
-        if lo >= 0 and hi < n:
-            best_val = parabola_peak(direction * y[lo, 0], best_val, direction * y[hi, 0])
-        peak[j] = direction * best_val
+        peak[j] = value
     return peak, force, penetration, separation, status

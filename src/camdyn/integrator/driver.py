@@ -254,7 +254,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
         if not (e == e) or not np.isfinite(y1[0]) or not np.isfinite(y1[1]):
             counters[COUNT_REJECTED] += 1
             h *= 0.25
-            if h < 1e-300:
+            if h <= 4e-16 * max(1.0, abs(t)):  # else the next pass reports underflow
                 counters[COUNT_STATUS] = 3
                 break
             continue

@@ -42,6 +42,7 @@ import numpy as np
 import xarray as xr
 
 from camdyn.errors import DataError, UnitError
+from camdyn.io.atomic import atomic_output
 from camdyn.params.units import parse_quantity, parse_speed
 from camdyn.records.schema import (
     CHANNEL_UNITS,
@@ -177,6 +178,10 @@ def _read_uff(path: Path) -> xr.Dataset:
     return make_record(time, cols, source=str(path), **meta)
 
 
+#: File suffixes of the record formats (CSV, netCDF/HDF5, UFF 58).
+RECORD_SUFFIXES = {".csv", ".txt", ".nc", ".h5", ".hdf5", ".nc4", ".uff", ".unv"}
+
+
 def read_measurement(path: str | Path) -> xr.Dataset:
     """Read a record from CSV, netCDF/HDF5 or UFF 58, by the file's suffix."""
     path = Path(path)
@@ -205,11 +210,21 @@ def _meta_pairs(ds: xr.Dataset) -> list[tuple[str, str]]:
 
 
 def write_measurement(ds: xr.Dataset, path: str | Path) -> Path:
-    """Write a record as CSV, netCDF or UFF 58, by the suffix of ``path``."""
+    """Write a record as CSV, netCDF or UFF 58, by the suffix of ``path`` (atomically: an
+    existing file of that name is replaced only once the new one is complete)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    names = [n for n in CHANNEL_UNITS if n in ds]
     suffix = path.suffix.lower()
+    if suffix not in RECORD_SUFFIXES:
+        raise DataError(f"{path}: unknown record format {suffix or '(no suffix)'!r}; "
+                        f"use one of {', '.join(sorted(RECORD_SUFFIXES))}")
+    names = [n for n in CHANNEL_UNITS if n in ds]
+    expected = ds["time"].size * (len(names) + 1) * 18
+    with atomic_output(path, expected) as tmp:
+        _write_record(ds, names, suffix, tmp)
+    return path
+
+
+def _write_record(ds: xr.Dataset, names: list[str], suffix: str, path: Path) -> None:
     if suffix in (".csv", ".txt"):
         with path.open("w") as fh:
             for k, v in _meta_pairs(ds):
@@ -224,8 +239,6 @@ def write_measurement(ds: xr.Dataset, path: str | Path) -> Path:
     elif suffix in (".uff", ".unv"):
         import pyuff
 
-        if path.exists():
-            path.unlink()
         t = ds["time"].values
         meta = ";".join(f"{k}={v}" for k, v in _meta_pairs(ds))
         uff = pyuff.UFF(str(path))
@@ -242,6 +255,3 @@ def write_measurement(ds: xr.Dataset, path: str | Path) -> Path:
                 orddenom_temp_unit_exp=0, orddenom_axis_units_lab="", z_axis_spec_data_type=0,
                 z_axis_len_unit_exp=0, z_axis_force_unit_exp=0, z_axis_temp_unit_exp=0, z_axis_axis_units_lab="",
                 data=ds[n].values.astype(float), x=t), mode="add")
-    else:
-        raise DataError(f"{path}: unknown measurement format {suffix!r} (use .csv, .nc/.h5 or .uff/.unv)")
-    return path

@@ -7,15 +7,20 @@ from pathlib import Path
 import xarray as xr
 
 from camdyn.errors import PresetError
+from camdyn.io.atomic import atomic_output
 
 __all__ = ["save_netcdf", "load_netcdf"]
 
 
 def save_netcdf(ds: xr.Dataset, path: str | Path) -> Path:
-    """Write a result Dataset to netCDF-4 (h5netcdf engine), keeping units attributes."""
+    """Write a result Dataset to netCDF-4 (h5netcdf engine), keeping units attributes.
+
+    The write is atomic (:func:`camdyn.io.atomic.atomic_output`): an existing file of that
+    name is replaced only once the new one is complete.
+    """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    ds.to_netcdf(path, engine="h5netcdf")
+    with atomic_output(path, int(ds.nbytes)) as tmp:
+        ds.to_netcdf(tmp, engine="h5netcdf")
     return path
 
 

@@ -8,18 +8,10 @@ Hertz (eqs 2.13-2.14, 3.11-3.13), with ``1/E* = (1-nu_c^2)/Y_c + (1-nu_b^2)/Y_b`
 
 Damping laws (thesis 2.3.4, 3.2): A viscous, B ``beta F_k(delta)``, C Zhang-Whiten
 ``beta delta^0.25``, D = B compressing / A restoring, E = C compressing / A restoring,
-and the generalized ``beta delta^n delta_dot`` (eq 3.2). Restitution-parameterised laws
-``F_d = chi(e) K delta^nH delta_dot / v_approach`` with the literature's factors:
-
-=================== ====================== =======================================
-law                  factor chi(e)          reference
-=================== ====================== =======================================
-Hunt-Crossley        3 (1 - e) / 2          doi:10.1115/1.3423596
-Lankarani-Nikravesh  3 (1 - e^2) / 4        doi:10.1115/1.2912617
-Flores et al.        8 (1 - e) / (5 e)      doi:10.1007/s11044-010-9237-4
-Gonthier et al.      (1 - e^2) / e          doi:10.1023/B:MUBO.0000029392.21648.bc
-Hu and Guo           3 (1 - e) / (2 e)      doi:10.1007/s11044-015-9453-z
-=================== ====================== =======================================
+the generalized ``beta delta^n delta_dot`` (thesis eq 3.2), and the restitution-parameterised
+laws ``F_d = chi(e) K delta^nH delta_dot / v_approach``. Each law is a row of
+:data:`camdyn.params.laws.TABLE`: the integer codes dispatched on below and the factors
+``chi(e)`` (compiled here from the rows' functions) come from there.
 """
 
 from __future__ import annotations
@@ -28,7 +20,9 @@ import math
 
 import numba
 
+from camdyn.errors import ParameterError
 from camdyn.model import layout as L
+from camdyn.params.laws import FIRST_RESTITUTION_CODE, LAWS, lookup
 
 __all__ = [
     "hertz_point_coefficient", "hertz_line_coefficient", "equivalent_radius",
@@ -63,17 +57,33 @@ def hertz_line_coefficient(modulus: float, length: float) -> float:
     return math.pi / 4.0 * modulus * length
 
 
+# Codes of the damping laws in the parameter vector (numba reads these module-level
+# integers as compile-time constants).
+VISCOUS = LAWS["viscous"].code
+STIFFNESS_PROPORTIONAL = LAWS["stiffness-proportional"].code
+ZHANG_WHITEN = LAWS["zhang-whiten"].code
+STIFFNESS_PROPORTIONAL_VISCOUS = LAWS["stiffness-proportional-viscous"].code
+ZHANG_WHITEN_VISCOUS = LAWS["zhang-whiten-viscous"].code
+POWER = LAWS["power"].code
+HUNT_CROSSLEY = LAWS["hunt-crossley"].code
+LANKARANI_NIKRAVESH = LAWS["lankarani-nikravesh"].code
+FLORES = LAWS["flores"].code
+GONTHIER = LAWS["gonthier"].code
+# The restitution factors chi(e) [-], compiled from the rows' functions.
+_hunt_crossley = numba.njit(LAWS["hunt-crossley"].restitution)
+_lankarani_nikravesh = numba.njit(LAWS["lankarani-nikravesh"].restitution)
+_flores = numba.njit(LAWS["flores"].restitution)
+_gonthier = numba.njit(LAWS["gonthier"].restitution)
+_hu_guo = numba.njit(LAWS["hu-guo"].restitution)
+
+
 def restitution_factor(law: str, restitution: float) -> float:
-    """Hysteresis factor ``chi(e)`` [-] of a restitution-parameterised law (table above)."""
-    e = restitution
-    factors = {
-        "hunt-crossley": 1.5 * (1 - e),
-        "lankarani-nikravesh": 0.75 * (1 - e * e),
-        "flores": 1.6 * (1 - e) / e,
-        "gonthier": (1 - e * e) / e,
-        "hu-guo": 1.5 * (1 - e) / e,
-    }
-    return factors[law]
+    """Hysteresis factor ``chi(e)`` [-] of a restitution-parameterised law for the
+    coefficient of restitution ``e`` = ``restitution`` [-] (its row's relation)."""
+    factor = lookup(law).restitution
+    if factor is None:
+        raise ParameterError(f"{law!r} is not a restitution-parameterised damping law")
+    return factor(restitution)
 
 
 def hunt_crossley_beta(gamma: float, stiffness: float) -> float:
@@ -84,15 +94,16 @@ def hunt_crossley_beta(gamma: float, stiffness: float) -> float:
 
 @numba.njit(cache=True)
 def _factor(code, e):
-    if code == 7:
-        return 1.5 * (1.0 - e)
-    if code == 8:
-        return 0.75 * (1.0 - e * e)
-    if code == 9:
-        return 1.6 * (1.0 - e) / e
-    if code == 10:
-        return (1.0 - e * e) / e
-    return 1.5 * (1.0 - e) / e
+    """Factor ``chi(e)`` [-] of the restitution law with ``code``, for restitution ``e`` [-]."""
+    if code == HUNT_CROSSLEY:
+        return _hunt_crossley(e)
+    if code == LANKARANI_NIKRAVESH:
+        return _lankarani_nikravesh(e)
+    if code == FLORES:
+        return _flores(e)
+    if code == GONTHIER:
+        return _gonthier(e)
+    return _hu_guo(e)
 
 
 @numba.njit(cache=True, inline="always")
@@ -131,20 +142,20 @@ def contact_force(delta, delta_dot, rho_c, approach, p):
     fk = kd * delta
     code = int(p[L.DAMPING_LAW])
     c = 0.0
-    if code == 1:
+    if code == VISCOUS:
         c = p[L.VISCOUS_C]
-    elif code == 2:  # c = beta F_k(delta): beta [s/m] times a force (see docs/model.md)
+    elif code == STIFFNESS_PROPORTIONAL:  # c = beta F_k(delta): beta [s/m] times a force (see docs/model.md)
         c = p[L.BETA] * kd * ad
-    elif code == 3:
+    elif code == ZHANG_WHITEN:
         c = p[L.BETA] * ad ** 0.25
-    elif code == 4:
+    elif code == STIFFNESS_PROPORTIONAL_VISCOUS:
         # D and E switch on the sign of delta_dot itself: F_d = c delta_dot is continuous
         # there, so the switch needs no event (an event on delta_dot would chatter on
         # rounding noise in sustained stiff contact)
         c = p[L.BETA] * kd * ad if delta_dot > 0.0 else p[L.VISCOUS_C]
-    elif code == 5:
+    elif code == ZHANG_WHITEN_VISCOUS:
         c = p[L.BETA] * ad ** 0.25 if delta_dot > 0.0 else p[L.VISCOUS_C]
-    elif code == 6:
+    elif code == POWER:
         n = p[L.EXPONENT]
         if n == 1.5:
             c = p[L.BETA] * ad * math.sqrt(ad)
@@ -152,7 +163,7 @@ def contact_force(delta, delta_dot, rho_c, approach, p):
             c = p[L.BETA]
         else:
             c = p[L.BETA] * ad ** n
-    elif code >= 7:
+    elif code >= FIRST_RESTITUTION_CODE:
         v = max(approach, p[L.V_REFERENCE])
         c = _factor(code, p[L.RESTITUTION]) * kd * ad / v   # chi(e) K delta^nH / v
     fn = fk + c * delta_dot

@@ -170,7 +170,7 @@ def natural_frequency(system: System) -> float:
 
 def viscous_coefficient(system: System, equilibrium: Equilibrium | None = None) -> float:
     """Viscous contact damping ``c = 2 zeta omega_n I_P / chi*^2`` [N s/m] (eq 2.24, 4.20)."""
-    if system.contact.damping not in ("viscous", "stiffness-proportional-viscous", "zhang-whiten-viscous"):
+    if not system.contact.law.needs_damping_ratio:  # laws A, D and E (camdyn.params.laws)
         return 0.0
     eq = equilibrium or static_equilibrium(system)
     if not eq.in_contact:

@@ -2,7 +2,10 @@
 the compiled core.
 
 The compiled functions take one parameter vector ``p``; the integer constants below
-name its slots. Integer codes (laws, kinds) are stored as floats.
+name its slots. Integer codes (laws, kinds) are stored as floats; the damping laws'
+codes are those of their rows in :data:`camdyn.params.laws.TABLE`. The slots that hold
+a parameter unchanged are listed in :data:`COPIED` by the parameter's dotted key
+(:mod:`camdyn.params.schema`); :func:`pack` computes the others.
 """
 
 from __future__ import annotations
@@ -11,9 +14,9 @@ import math
 
 import numpy as np
 
+from camdyn.params.schema import parameter_index
 from camdyn.params.system import (
     CONTACT_KINDS,
-    DAMPING_LAWS,
     FRICTION_LAWS,
     MOTION_KINDS,
     System,
@@ -43,7 +46,7 @@ GRAVITY = 16        # g [m/s^2]
 CONTACT_KIND = 17   # 0 point, 1 line
 ESTAR = 18          # E* [Pa]
 LINE_LENGTH = 19    # l [m]
-DAMPING_LAW = 20    # code of DAMPING_LAWS
+DAMPING_LAW = 20    # code of the damping law (camdyn.params.laws.TABLE)
 VISCOUS_C = 21      # c of law A [N s/m]
 BETA = 22           # beta [law-dependent]
 EXPONENT = 23       # n of the power law [-]
@@ -70,6 +73,21 @@ MODE_APPROACH = 3    # approach velocity of the current contact [m/s] (restituti
 MODE_IMPACT = 4      # 1 if the current contact began with an impact (its peak is tracked)
 MODE_SIZE = 5
 
+#: Slot -> dotted key of the parameter it holds unchanged, in SI (camdyn.params.config.SCHEMA).
+COPIED = {
+    MASS: "follower.mass", INERTIA: "follower.inertia", CG: "follower.cg_distance", WIDTH: "follower.width",
+    PIN: "follower.pin_radius",
+    SEMI_A: "cam.semi_major", SEMI_B: "cam.semi_minor", RUNOUT: "cam.runout", PIVOT_X: "cam.pivot_x",
+    PIVOT_Y: "cam.pivot_y",
+    KS: "spring.stiffness", LS: "spring.free_length", DX: "spring.attachment_x", DY: "spring.ground_depth",
+    TILT: "spring.tilt", GRAVITY: "environment.gravity",
+    LINE_LENGTH: "contact.length", BETA: "contact.beta", EXPONENT: "contact.exponent",
+    RESTITUTION: "contact.restitution", V_REFERENCE: "contact.reference_velocity", CLIP: "contact.clip_adhesion",
+    MU: "friction.coefficient", SMOOTHING: "friction.smoothing",
+    SWING: "motion.amplitude",
+}
+_READERS = tuple((slot, parameter_index(System)[key].getter) for slot, key in COPIED.items())
+
 
 def effective_modulus(system: System) -> float:
     """Contact modulus ``E*`` [Pa]: ``1/E* = (1-nu_c^2)/Y_c + (1-nu_b^2)/Y_b`` (eq 2.13, 3.12)."""
@@ -91,40 +109,17 @@ def pack(system: System, viscous_c: float = 0.0, initial_angle: float | None = N
     """
     s = system
     p = np.zeros(SIZE)
-    p[MASS] = s.follower.mass
-    p[INERTIA] = s.follower.inertia
-    p[CG] = s.follower.cg_distance
-    p[WIDTH] = s.follower.width
+    for slot, read in _READERS:
+        p[slot] = read(s)
     p[OFFSET] = s.follower.surface_offset
-    p[PIN] = s.follower.pin_radius
-    p[SEMI_A] = s.cam.semi_major
-    p[SEMI_B] = s.cam.semi_minor
-    p[RUNOUT] = s.cam.runout
-    p[PIVOT_X] = s.cam.pivot_x
-    p[PIVOT_Y] = s.cam.pivot_y
-    p[KS] = s.spring.stiffness
-    p[LS] = s.spring.free_length
-    p[DX] = s.spring.attachment_x
-    p[DY] = s.spring.ground_depth
-    p[TILT] = s.spring.tilt
-    p[GRAVITY] = s.gravity
     p[CONTACT_KIND] = CONTACT_KINDS[s.contact.kind]
     p[ESTAR] = effective_modulus(s)
-    p[LINE_LENGTH] = s.contact.length
-    p[DAMPING_LAW] = DAMPING_LAWS[s.contact.damping]
+    p[DAMPING_LAW] = s.contact.law.code
     p[VISCOUS_C] = viscous_c
-    p[BETA] = s.contact.beta
-    p[EXPONENT] = s.contact.exponent
-    p[RESTITUTION] = s.contact.restitution
-    p[V_REFERENCE] = s.contact.reference_velocity
-    p[CLIP] = 1.0 if s.contact.clip_adhesion else 0.0
     p[FRICTION_LAW] = FRICTION_LAWS[s.friction.law]
-    p[MU] = s.friction.coefficient
-    p[SMOOTHING] = s.friction.smoothing
     p[MOTION_KIND] = MOTION_KINDS[s.motion.kind]
     theta0 = initial_angle if initial_angle is not None else s.motion.initial_angle
     p[THETA0] = 0.0 if theta0 is None else theta0
     p[OMEGA] = s.motion.angular_speed
-    p[SWING] = s.motion.amplitude
     p[OMEGA_C] = 2.0 * math.pi * s.motion.frequency * s.motion.direction
     return p

@@ -4,42 +4,30 @@ All values are SI inside camdyn. Configuration files and the command line give t
 as text with units (see :mod:`camdyn.params.units`); :func:`camdyn.params.config.build_system`
 turns dotted keys such as ``cam.runout`` into these dataclasses.
 
-Symbols (docs/model.md, thesis nomenclature) are mapped in each field's docstring.
+Symbols (docs/model.md, thesis nomenclature) are mapped in each field's docstring. Each
+field is declared with :func:`camdyn.params.schema.parameter`: its unit, its meaning and
+the unit configuration files write it in are given there once, and the configuration
+schema, reader and writer (:mod:`camdyn.params.config`) are derived from them. The
+damping laws are the rows of :mod:`camdyn.params.laws`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, fields, replace
 
 from camdyn.errors import GeometryError, ParameterError
+from camdyn.params.laws import DAMPING_ALIASES, DAMPING_LAWS, RESTITUTION_LAWS, DampingLaw, lookup
+from camdyn.params.schema import group, parameter
 
+# DAMPING_LAWS, DAMPING_ALIASES and RESTITUTION_LAWS are views of the damping-law table
+# (camdyn.params.laws.TABLE), also offered here beside the other name tables.
 __all__ = [
     "Cam", "Follower", "Spring", "Contact", "Friction", "Motion", "System",
-    "DAMPING_LAWS", "FRICTION_LAWS", "MOTION_KINDS", "ZERO_STATES", "CONTACT_KINDS",
+    "DAMPING_LAWS", "DAMPING_ALIASES", "RESTITUTION_LAWS", "FRICTION_LAWS", "MOTION_KINDS", "ZERO_STATES",
+    "CONTACT_KINDS",
 ]
 
-#: Contact damping laws (docs/model.md §3; thesis 2.3.4 and 3.2) and their integer codes
-#: used by the compiled core. Letters A-E are the thesis's models.
-DAMPING_LAWS = {
-    "none": 0,
-    "viscous": 1,                 # A: c = 2 zeta omega_n I_P / chi*^2       (eq 2.24, 4.20)
-    "stiffness-proportional": 2,  # B: c = beta F_k(delta) (eq 2.25)          [beta: s/m]
-    "zhang-whiten": 3,            # C: c = beta delta^0.25                    [N s / m^1.25]
-    "stiffness-proportional-viscous": 4,  # D: B while compressing, A while restoring
-    "zhang-whiten-viscous": 5,    # E: C while compressing, A while restoring
-    "power": 6,                   # F_d = beta delta^n delta_dot (eq 3.2, 3.14) [N s / m^(n+1)]
-    "hunt-crossley": 7,           # restitution-parameterised laws:
-    "lankarani-nikravesh": 8,     #   F_d = D(e, v-) K delta^n_H delta_dot
-    "flores": 9,
-    "gonthier": 10,
-    "hu-guo": 11,
-}
-#: Aliases using the thesis's letters.
-DAMPING_ALIASES = {"A": "viscous", "B": "stiffness-proportional", "C": "zhang-whiten",
-                   "D": "stiffness-proportional-viscous", "E": "zhang-whiten-viscous",
-                   "generalized": "power"}
-RESTITUTION_LAWS = ("hunt-crossley", "lankarani-nikravesh", "flores", "gonthier", "hu-guo")
 FRICTION_LAWS = {"none": 0, "coulomb": 1, "tanh": 2}
 MOTION_KINDS = {"constant": 0, "oscillating": 1}
 #: Conventions for the 0-state that fixes ``Theta0`` when no initial angle is given
@@ -90,13 +78,13 @@ class Cam:
         Poisson's ratio ``nu_c`` [-].
     """
 
-    semi_major: float
-    semi_minor: float
-    runout: float
-    pivot_x: float
-    pivot_y: float
-    youngs_modulus: float = 210e9
-    poisson_ratio: float = 0.3
+    semi_major: float = parameter("m", "semi-axis a of an elliptic cam, along the line through the pivot")
+    semi_minor: float = parameter("m", "semi-axis b of an elliptic cam")
+    runout: float = parameter("m", "runout e: distance from the cam pivot to its centroid")
+    pivot_x: float = parameter("m", "horizontal position of the cam pivot E relative to the follower pivot P")
+    pivot_y: float = parameter("m", "vertical position of the cam pivot E relative to P")
+    youngs_modulus: float = parameter("Pa", "Young's modulus of the cam", 210e9)
+    poisson_ratio: float = parameter("", "Poisson's ratio of the cam", 0.3)
 
     def __post_init__(self):
         _check_finite("cam", self)
@@ -146,15 +134,17 @@ class Follower:
         free end (``length``). Measured ``alpha_ddot = a_t / l_a`` (docs/model.md §3).
     """
 
-    mass: float
-    inertia: float
-    cg_distance: float
-    length: float
-    width: float
-    pin_radius: float = 0.0
-    youngs_modulus: float = 210e9
-    poisson_ratio: float = 0.3
-    accelerometer_distance: float = 0.0
+    mass: float = parameter("kg", "follower mass m")
+    inertia: float = parameter("kg*m**2", "moment of inertia about the pivot I_P")
+    cg_distance: float = parameter("m", "distance from the pivot to the centre of gravity")
+    length: float = parameter("m", "bar length")
+    width: float = parameter("m", "bar width wb")
+    pin_radius: float = parameter("m", "dowel-pin radius rd (0: contact on the bar face; a point contact then "
+                                       "uses the cam curvature alone, eq 2.34)", 0.0)
+    youngs_modulus: float = parameter("Pa", "Young's modulus of the follower", 210e9)
+    poisson_ratio: float = parameter("", "Poisson's ratio of the follower", 0.3)
+    accelerometer_distance: float = parameter("m", "distance l_a of the tangential accelerometer from the pivot",
+                                              0.0)
 
     def __post_init__(self):
         _check_finite("follower", self)
@@ -203,11 +193,11 @@ class Spring:
         Angle ``sigma`` of the spring from the vertical, clockwise [rad].
     """
 
-    stiffness: float
-    free_length: float
-    attachment_x: float
-    ground_depth: float
-    tilt: float = 0.0
+    stiffness: float = parameter("N/m", "spring stiffness ks")
+    free_length: float = parameter("m", "spring free length Ls")
+    attachment_x: float = parameter("m", "horizontal distance dx from the pivot to the spring")
+    ground_depth: float = parameter("m", "depth dy of the spring's grounded end below the pivot")
+    tilt: float = parameter("rad", "spring tilt sigma from the vertical, clockwise (eq 4.44)", 0.0)
 
     def __post_init__(self):
         _check_finite("spring", self)
@@ -229,14 +219,15 @@ class Contact:
     length : float
         Line-contact length ``l`` [m]; unused for point contact.
     damping : str
-        A key of :data:`DAMPING_LAWS` (thesis letters A-E are accepted as aliases).
+        Name of a damping law, a row of :data:`camdyn.params.laws.TABLE` (thesis letters
+        A-E are accepted as aliases and replaced by the name).
     damping_ratio : float
         ``zeta`` of the viscous law A, and of the restoring phase of D and E [-].
-    beta : float
-        Damping coefficient of laws B [s/m], C and E [N s/m^1.25], power law
-        [N s/m^(n+1)].
     exponent : float
         ``n`` of the power law [-].
+    beta : float
+        Damping coefficient of laws B and D [s/m], C and E [N s/m^1.25], power law
+        [N s/m^(n+1)] (the law's row gives its unit).
     restitution : float
         Coefficient of restitution ``e`` of the restitution-parameterised laws [-].
     reference_velocity : float
@@ -247,35 +238,38 @@ class Contact:
         clip (its fig 3.8), so the default is False.
     """
 
-    kind: str = "point"
-    length: float = 0.0
-    damping: str = "none"
-    damping_ratio: float = 0.0
-    beta: float = 0.0
-    exponent: float = 1.5
-    restitution: float = 1.0
-    reference_velocity: float = 0.01
-    clip_adhesion: bool = False
+    kind: str = parameter("str", "'point' (dowel pin, Hertz point contact) or 'line' (bar face)", "point")
+    length: float = parameter("m", "line-contact length l", 0.0)
+    damping: str = parameter("str", "damping law: " + ", ".join(DAMPING_LAWS) + " (or A-E)", "none")
+    damping_ratio: float = parameter("", "zeta of the viscous law A (and the restoring phase of D, E)", 0.0)
+    exponent: float = parameter("", "exponent n of the power law beta*delta^n*delta_dot", 1.5)
+    beta: float = parameter("law", "damping coefficient beta; unit depends on the law", 0.0)
+    restitution: float = parameter("", "coefficient of restitution e of the restitution laws", 1.0)
+    reference_velocity: float = parameter("m/s", "approach velocity of restitution laws when starting in contact",
+                                          0.01)
+    clip_adhesion: bool = parameter("bool", "set negative (adhesive) normal force to zero", False)
 
     def __post_init__(self):
         _check_finite("contact", self)
         if self.kind not in CONTACT_KINDS:
             raise ParameterError(f"contact.kind must be one of {sorted(CONTACT_KINDS)}, got {self.kind!r}")
-        law = DAMPING_ALIASES.get(self.damping, self.damping)
-        if law not in DAMPING_LAWS:
-            raise ParameterError(
-                f"contact.damping must be one of {sorted(DAMPING_LAWS)} (or A-E), got {self.damping!r}")
-        object.__setattr__(self, "damping", law)
+        law = lookup(self.damping)
+        object.__setattr__(self, "damping", law.name)
         if self.kind == "line":
             _positive("contact", "length", self.length)
         _nonnegative("contact", "damping_ratio", self.damping_ratio)
         _nonnegative("contact", "beta", self.beta)
         _nonnegative("contact", "exponent", self.exponent)
-        if law in RESTITUTION_LAWS:
-            lo = 0.0 if law in ("hunt-crossley", "lankarani-nikravesh") else 1e-3
+        if law.restitution is not None:
+            lo = law.lowest_restitution
             if not lo <= self.restitution <= 1.0:
                 raise ParameterError(f"contact.restitution must lie in ({lo:g}, 1], got {self.restitution:g}")
         _positive("contact", "reference_velocity", self.reference_velocity)
+
+    @property
+    def law(self) -> DampingLaw:
+        """The damping law's row (:data:`camdyn.params.laws.TABLE`)."""
+        return lookup(self.damping)
 
 
 @dataclass(frozen=True)
@@ -293,9 +287,9 @@ class Friction:
         ``sigma`` of the tanh law [s/m]; the thesis used 10 s/m.
     """
 
-    law: str = "coulomb"
-    coefficient: float = 0.0
-    smoothing: float = 10.0
+    law: str = parameter("str", "'coulomb', 'tanh' or 'none'", "coulomb")
+    coefficient: float = parameter("", "friction coefficient mu_m", 0.0)
+    smoothing: float = parameter("s/m", "sigma of the tanh friction law", 10.0)
 
     def __post_init__(self):
         _check_finite("friction", self)
@@ -320,26 +314,27 @@ class Motion:
         Peak-to-peak swing ``Theta_p`` [rad], oscillating motion.
     frequency : float
         Oscillation frequency ``f_c`` [Hz], oscillating motion.
-    initial_angle : float or None
-        ``Theta0`` [rad]; None uses the 0-state (docs/model.md §2).
+    direction : int
+        +1 for counter-clockwise cam rotation (the default), -1 for clockwise; the
+        thesis's self- against de-energizing studies (2.7.1) flip it.
     zero_state : str
         Which 0-state fixes ``Theta0`` when ``initial_angle`` is None:
         ``"maximum-lift"`` (thesis eqs 3.3-3.4: the cam centroid offset along the
         follower normal), ``"runout-parallel"`` (thesis eqs 4.3-4.4: the runout, the
         ellipse's major axis, parallel to the follower), or ``"auto"``: maximum lift for
         a circle, runout parallel for an ellipse.
-    direction : int
-        +1 for counter-clockwise cam rotation (the default), -1 for clockwise; the
-        thesis's self- against de-energizing studies (2.7.1) flip it.
+    initial_angle : float or None
+        ``Theta0`` [rad]; None uses the 0-state (docs/model.md §2).
     """
 
-    kind: str = "constant"
-    speed: float = 10.0
-    amplitude: float = 0.0
-    frequency: float = 0.0
-    initial_angle: float | None = None
-    direction: int = 1
-    zero_state: str = "auto"
+    kind: str = parameter("str", "'constant' or 'oscillating'", "constant")
+    speed: float = parameter("speed", "cam speed (Hz = rev/s, rpm or rad/s)", 10.0, written="Hz")
+    amplitude: float = parameter("rad", "peak-to-peak swing Theta_p of oscillating motion", 0.0)
+    frequency: float = parameter("Hz", "frequency of oscillating motion", 0.0)
+    direction: int = parameter("int", "+1 counter-clockwise (default), -1 clockwise", 1)
+    zero_state: str = parameter("str", "0-state fixing Theta0: 'maximum-lift' (thesis ch 3), 'runout-parallel' "
+                                       "(ch 4) or 'auto'", "auto")
+    initial_angle: float | None = parameter("rad", "initial cam angle Theta0 (default: the 0-state)", None)
 
     def __post_init__(self):
         _check_finite("motion", self)
@@ -383,13 +378,13 @@ class System:
         Gravitational acceleration ``g`` [m/s^2].
     """
 
-    cam: Cam
-    follower: Follower
-    spring: Spring
-    contact: Contact = field(default_factory=Contact)
-    friction: Friction = field(default_factory=Friction)
-    motion: Motion = field(default_factory=Motion)
-    gravity: float = 9.81
+    cam: Cam = group(Cam, required=True)
+    follower: Follower = group(Follower, required=True)
+    spring: Spring = group(Spring, required=True)
+    contact: Contact = group(Contact)
+    friction: Friction = group(Friction)
+    motion: Motion = group(Motion)
+    gravity: float = parameter("m/s**2", "gravitational acceleration g", 9.81, table="environment")
     name: str = "custom"
     citation: str = ""
 

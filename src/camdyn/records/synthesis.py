@@ -7,6 +7,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from camdyn.analysis.kinematics import contact_start
 from camdyn.errors import ParameterError
 from camdyn.params.system import System
 from camdyn.records.schema import make_record
@@ -41,6 +42,9 @@ def synthesize(system: System, speed: float | None = None, revolutions: float = 
         its mean [-] (0.01 is "1 % noise").
     settle : float
         Cam periods simulated and dropped first, so the record is in steady state [-].
+        Where inverse kinematics keeps contact, the run starts on the contact motion
+        (:func:`camdyn.analysis.kinematics.contact_start`), so that the start-up cannot
+        leave the follower on an impacting motion; otherwise from rest.
     seed : int, optional
         Seed of the noise generator (None: fresh entropy).
     channels : sequence of str
@@ -59,7 +63,8 @@ def synthesize(system: System, speed: float | None = None, revolutions: float = 
     _check_noise_and_settle(noise, settle)
     if speed is not None:
         system = system.with_values(**{"motion.speed": float(speed)})
-    ds = simulate(system, revolutions=settle + revolutions, sample_rate=sample_rate)
+    ds = simulate(system, revolutions=settle + revolutions, sample_rate=sample_rate,
+                  initial_state=contact_start(system))
     period = system.motion.period
     keep = ds["time"].values >= settle * period - 0.5 / sample_rate
     ds = ds.isel(time=keep)

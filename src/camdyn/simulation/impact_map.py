@@ -81,6 +81,37 @@ def simulate_impact_map(system: System, speed=None, revolutions: float = 30.0, g
         ``impact_separation_velocity`` [m/s], ``impact_restitution`` [-] and
         ``impact_rate_jump`` [rad/s].
     """
+    system = _checked_system(system, speed, revolutions, gamma, restitution, pulse_duration)
+    period = system.motion.period
+    prep = prepare(system)
+    p = prep.p.copy()
+    # S3 has no contact force: the restitution law is the whole contact (a pulse may
+    # leave the follower a micrometre inside the cam, which must not push it)
+    p[L.ESTAR] = 0.0
+    p[L.VISCOUS_C] = 0.0
+    p[L.BETA] = 0.0
+    duration = revolutions * period
+    n_out = int(math.floor(duration * sample_rate + 1e-9)) + 1
+    t_out = np.arange(n_out) / sample_rate
+    y_out = np.full((n_out, 2), np.nan)
+    # start in free flight just off the cam at the static angle, falling onto it
+    chi = contact_kinematics(prep.y0[0], 0.0, prep.theta0, 0.0, p)[2]
+    y = np.array([prep.y0[0] + math.copysign(1e-4, chi), 0.0, 0.0])
+    law = (restitution, gamma)
+    limit = max_impacts if max_impacts is not None else int(20 * revolutions + 100)
+    rows = _flights(p, y, duration, period, t_out, y_out, rtol, atol, law, limit, pulse_duration)
+    imp = np.array(rows, dtype=float).reshape(-1, 5)
+    acc = np.array([free_acceleration(a, p) if math.isfinite(a) else math.nan for a in y_out[:, 0]])
+    if pulse_duration > 0:
+        for t_hit, jump in imp[:, [0, 4]]:
+            inside = (t_out >= t_hit) & (t_out < t_hit + pulse_duration)
+            acc[inside] += jump * _hann(t_out[inside] - t_hit, pulse_duration)
+    return _dataset(system, prep, p, t_out, y_out, acc, imp, law, pulse_duration)
+
+
+def _checked_system(system: System, speed, revolutions: float, gamma: float | None, restitution: float | None,
+                    pulse_duration: float) -> System:
+    """The rig at ``speed`` [Hz], after checking the arguments of :func:`simulate_impact_map`."""
     if speed is not None:
         system = system.with_values(**{"motion.speed": parse_speed(speed)})
     if system.motion.kind != "constant":
@@ -96,24 +127,40 @@ def simulate_impact_map(system: System, speed=None, revolutions: float = 30.0, g
     if not (math.isfinite(pulse_duration) and 0.0 <= pulse_duration < 0.05 * period):
         raise ParameterError(f"the impulse pulse must last between 0 and 5 % of the cam period, "
                              f"got {pulse_duration!r} s")
-    prep = prepare(system)
-    p = prep.p.copy()
-    # S3 has no contact force: the restitution law is the whole contact (a pulse may
-    # leave the follower a micrometre inside the cam, which must not push it)
-    p[L.ESTAR] = 0.0
-    p[L.VISCOUS_C] = 0.0
-    p[L.BETA] = 0.0
-    duration = revolutions * period
-    n_out = int(math.floor(duration * sample_rate + 1e-9)) + 1
-    t_out = np.arange(n_out) / sample_rate
-    y_out = np.full((n_out, 2), np.nan)
-    # start in free flight just off the cam at the static angle, falling onto it
-    chi = contact_kinematics(prep.y0[0], 0.0, prep.theta0, 0.0, p)[2]
-    y = np.array([prep.y0[0] + math.copysign(1e-4, chi), 0.0, 0.0])
+    return system
+
+
+def _flights(p, y, duration, period, t_out, y_out, rtol, atol, law, limit, pulse_duration) -> list:
+    """Simulate the free flights between impacts and apply each impact.
+
+    Parameters
+    ----------
+    p : ndarray
+        Parameter vector without contact force (:mod:`camdyn.model.layout`).
+    y : ndarray (3,)
+        Initial state: angle [rad], rate [rad/s], cam work [J].
+    duration, period : float
+        Length of the run and cam period [s].
+    t_out : ndarray
+        Output times [s]; ``y_out`` (n_out, 2) receives the angle [rad] and rate [rad/s].
+    rtol, atol : float
+        Tolerances of the driver.
+    law : tuple
+        ``(restitution, gamma)``: a constant ``xi`` [-] or None, and the slope [s/m].
+    limit : int
+        Most impacts allowed [-].
+    pulse_duration : float
+        Length of each impulse pulse [s] (0: instantaneous).
+
+    Returns
+    -------
+    list of tuple
+        Per impact: time [s], approach and separation velocity [m/s], ``xi`` [-] and
+        the jump of ``alpha_dot`` [rad/s].
+    """
     t = 0.0
     rows = []
     h_max = period / 32.0
-    limit = max_impacts if max_impacts is not None else int(20 * revolutions + 100)
     while t < duration:
         mask = t_out >= t
         span_end = min(duration, t + 1.5 * period)
@@ -136,31 +183,58 @@ def simulate_impact_map(system: System, speed=None, revolutions: float = 30.0, g
             y = ys[-1].copy() if times.size else y
             continue
         alpha, rate = onsets[0, 3], onsets[0, 4]
-        theta, theta_dot = cam_angle(t_hit, p)
-        _, delta_dot, chi, _, _, n_v, _ = contact_kinematics(alpha, rate, theta, theta_dot, p)
-        xi = restitution if restitution is not None else 1.0 - gamma * delta_dot
-        if xi < 0:
-            raise SimulationError(f"approach velocity {delta_dot:.4g} m/s exceeds 1/gamma: xi = 1 - gamma v "
-                                  "would be negative")
-        new_rate = (xi * delta_dot - n_v) / chi
-        rows.append((t_hit, delta_dot, xi * delta_dot, xi, new_rate - rate))
+        row, new_rate = _impact(p, t_hit, alpha, rate, law)
+        rows.append(row)
         if len(rows) > limit:
             raise SimulationError(f"more than {limit} impacts: the follower chatters (xi near 1 at low "
                                   "approach velocity); shorten the run or lower the restitution")
         if pulse_duration > 0:
-            t, state = _through_pulse(p, t_hit, alpha, rate, new_rate - rate, pulse_duration, t_out, y_out)
+            t, state = _through_pulse(p, t_hit, alpha, rate, row[4], pulse_duration, t_out, y_out)
             y = np.array([state[0], state[1], 0.0])
         else:
             t = t_hit
             y = np.array([alpha, new_rate, 0.0])
-    imp = np.array(rows, dtype=float).reshape(-1, 5)
-    acc = np.array([free_acceleration(a, p) if math.isfinite(a) else math.nan for a in y_out[:, 0]])
-    if pulse_duration > 0:
-        for t_hit, jump in imp[:, [0, 4]]:
-            inside = (t_out >= t_hit) & (t_out < t_hit + pulse_duration)
-            acc[inside] += jump * _hann(t_out[inside] - t_hit, pulse_duration)
+    return rows
+
+
+def _impact(p, t_hit, alpha, rate, law) -> tuple[tuple, float]:
+    """The restitution law at one impact (eqs 3.24-3.27).
+
+    Parameters
+    ----------
+    p : ndarray
+        Parameter vector.
+    t_hit : float
+        Time of the contact onset [s].
+    alpha, rate : float
+        Follower angle [rad] and rate [rad/s] at the onset.
+    law : tuple
+        ``(restitution, gamma)``: a constant ``xi`` [-] or None, and the slope [s/m].
+
+    Returns
+    -------
+    row : tuple
+        Time [s], approach and separation velocity [m/s], ``xi`` [-] and the jump of
+        ``alpha_dot`` [rad/s].
+    new_rate : float
+        ``alpha_dot`` after the impact [rad/s].
+    """
+    restitution, gamma = law
+    theta, theta_dot = cam_angle(t_hit, p)
+    _, delta_dot, chi, _, _, n_v, _ = contact_kinematics(alpha, rate, theta, theta_dot, p)
+    xi = restitution if restitution is not None else 1.0 - gamma * delta_dot
+    if xi < 0:
+        raise SimulationError(f"approach velocity {delta_dot:.4g} m/s exceeds 1/gamma: xi = 1 - gamma v "
+                              "would be negative")
+    new_rate = (xi * delta_dot - n_v) / chi
+    return (t_hit, delta_dot, xi * delta_dot, xi, new_rate - rate), new_rate
+
+
+def _dataset(system, prep, p, t_out, y_out, acc, imp, law, pulse_duration) -> xr.Dataset:
+    """The record of :func:`simulate_impact_map` from its time series and impact table."""
+    restitution, gamma = law
     theta = p[L.THETA0] + p[L.OMEGA] * t_out
-    ds = xr.Dataset(
+    return xr.Dataset(
         {"alpha": ("time", y_out[:, 0], {"units": "rad", "long_name": "follower angle (clockwise)"}),
          "alpha_dot": ("time", y_out[:, 1], {"units": "rad/s", "long_name": "follower angular velocity"}),
          "alpha_ddot": ("time", acc, {"units": "rad/s^2", "long_name": "follower angular acceleration " + (
@@ -178,7 +252,6 @@ def simulate_impact_map(system: System, speed=None, revolutions: float = 30.0, g
                "restitution": restitution if restitution is not None else math.nan,
                "pulse_duration_s": pulse_duration,
                "parameters_toml": system_to_toml(system), "initial_cam_angle_rad": prep.theta0})
-    return ds
 
 
 def _hann(u, width):

@@ -40,8 +40,7 @@ class Prepared:
         self.theta0 = theta0
         self.equilibrium: Equilibrium = static_equilibrium(system, theta0)
         self.viscous_c = viscous_coefficient(system, self.equilibrium) if self.equilibrium.in_contact else 0.0
-        if system.contact.damping in ("viscous", "stiffness-proportional-viscous", "zhang-whiten-viscous") \
-                and not self.equilibrium.in_contact:
+        if system.contact.law.needs_damping_ratio and not self.equilibrium.in_contact:
             self.viscous_c = viscous_coefficient(system)  # raises a clear error
         self.p = L.pack(system, viscous_c=self.viscous_c, initial_angle=theta0)
         self.y0 = np.array([self.equilibrium.angle, 0.0, 0.0])

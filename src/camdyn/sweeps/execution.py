@@ -44,7 +44,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from camdyn.errors import CamdynError, ParameterError, SimulationError
+from camdyn.errors import CamdynError, ParameterError, SimulationError, SweepInterrupted
 from camdyn.integrator import driver
 from camdyn.model.layout import SIZE
 from camdyn.simulation.runner import penetration_resolution, prepare
@@ -151,9 +151,14 @@ def _executor(workers: int, dask: str | None, threads: int, point):
             yield None, 1, f"inline, {threads} thread(s)"
             return
         ctx = multiprocessing.get_context("spawn")
-        with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=worker.start_local,
-                                    initargs=(threads, point)) as pool:
+        pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=worker.start_local,
+                                      initargs=(threads, point))
+        try:
             yield pool, workers, f"{workers} local worker process(es)"
+        except BaseException:
+            _stop_workers(pool)
+            raise
+        pool.shutdown(wait=True)
         return
     try:
         import dask as dask_config
@@ -175,6 +180,19 @@ def _executor(workers: int, dask: str | None, threads: int, point):
             client.run(worker.warm, threads, point)
         n = len(client.scheduler_info()["workers"])
         yield client.get_executor(), max(n, 1), f"Dask at {client.scheduler.address} ({n} workers)"
+
+
+def _stop_workers(pool: cf.ProcessPoolExecutor) -> None:
+    """Stop a local pool at once (an interrupt or a failure): queued chunks are cancelled
+    and the worker processes terminated, not waited for."""
+    processes = list(getattr(pool, "_processes", {}).values())   # the pool has no public handle on them
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        with contextlib.suppress(Exception):
+            process.terminate()
+    for process in processes:
+        with contextlib.suppress(Exception):
+            process.join(timeout=5)
 
 
 def _prepare_base(spec: SweepSpec):
@@ -232,29 +250,41 @@ def run_sweep(spec: SweepSpec, workers: int | None = None, dask: str | None = No
     if workers < 0 or threads < 1:
         raise ParameterError("workers must be >= 0 and threads >= 1")
     say = echo or (lambda _msg: None)
-    store = Checkpoint(spec, restart=restart)
+    store = Checkpoint(spec, restart=restart, say=say)
+    try:
+        _compute_missing(spec, store, workers, dask, threads, progress, say)
+        path = store.assemble(keep_parts=keep_parts)
+    except KeyboardInterrupt:
+        saved = len(store.done())
+        raise SweepInterrupted(f"interrupted: {saved} of {spec.chunks} chunks are saved in {store.folder}; "
+                               f"run the same command again to resume") from None
+    finally:
+        store.close()
+    return xr.open_dataset(path, engine="h5netcdf")
+
+
+def _compute_missing(spec: SweepSpec, store: Checkpoint, workers, dask, threads, progress, say) -> None:
+    """Compute and save the chunks not yet on disk."""
     done = store.done()
     todo = [c for c in range(spec.chunks) if c not in done]
     base = _prepare_base(spec)
     _check_resolution(spec, base, say)
     if done:
         say(f"resuming: {len(done)} of {spec.chunks} chunks already on disk in {store.folder}")
-    if todo:
-        columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
-                   TextColumn("points"), TimeElapsedColumn(), TimeRemainingColumn())
-        with Progress(*columns, disable=not progress) as bar, \
-                _executor(workers, dask, threads, _warm_point(base)) as (pool, n, how):
-            say(f"{spec.points} points in {spec.chunks} chunks of {spec.chunk} on {how}")
-            task = bar.add_task(spec.name, total=spec.points,
-                                completed=sum(_chunk_size(spec, c) for c in done))
-            if pool is None:
-                for c in todo:
-                    store.save(c, compute_chunk(spec, c, threads))
-                    bar.advance(task, _chunk_size(spec, c))
-            else:
-                _drain(pool, n, spec, todo, threads, store, lambda c: bar.advance(task, _chunk_size(spec, c)))
-    path = store.assemble(keep_parts=keep_parts)
-    return xr.open_dataset(path, engine="h5netcdf")
+    if not todo:
+        return
+    columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TextColumn("points"), TimeElapsedColumn(), TimeRemainingColumn())
+    with Progress(*columns, disable=not progress) as bar, \
+            _executor(workers, dask, threads, _warm_point(base)) as (pool, n, how):
+        say(f"{spec.points} points in {spec.chunks} chunks of {spec.chunk} on {how}")
+        task = bar.add_task(spec.name, total=spec.points, completed=sum(_chunk_size(spec, c) for c in done))
+        if pool is None:
+            for c in todo:
+                store.save(c, compute_chunk(spec, c, threads))
+                bar.advance(task, _chunk_size(spec, c))
+        else:
+            _drain(pool, n, spec, todo, threads, store, lambda c: bar.advance(task, _chunk_size(spec, c)))
 
 
 def _chunk_size(spec: SweepSpec, chunk: int) -> int:

@@ -19,6 +19,7 @@ import xarray as xr
 
 from camdyn.analysis.kinematics import inverse_kinematics, loss_of_contact_speed
 from camdyn.errors import CamdynError
+from camdyn.io.atomic import atomic_output
 from camdyn.sweeps.spec import SweepSpec
 
 __all__ = ["KINEMATIC_REGIMES", "kinematic_regimes", "loss_of_contact_curve", "boundary_agreement",
@@ -102,5 +103,6 @@ def regime_map(spec: SweepSpec, **run) -> xr.Dataset:
     if curve is not None:
         ds["loss_of_contact_speed"] = curve
     ds.attrs.update({f"agreement_{k}": v for k, v in boundary_agreement(ds).items()})
-    ds.to_netcdf(spec.output, engine="h5netcdf")
+    with atomic_output(spec.output, int(ds.nbytes)) as tmp:
+        ds.to_netcdf(tmp, engine="h5netcdf")
     return ds

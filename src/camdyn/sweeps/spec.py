@@ -51,11 +51,11 @@ from camdyn import __version__
 from camdyn.errors import CamdynError, ParameterError
 from camdyn.params.config import (
     SCHEMA,
-    _convert,
-    _unknown,
+    convert_value,
     load_system,
     system_from_toml,
     system_to_toml,
+    unknown_key_error,
 )
 from camdyn.params.system import System
 
@@ -200,13 +200,13 @@ def _values(i: int, entry: dict) -> Vary:
     if not isinstance(key, str):
         raise ParameterError(f"sweep spec: {where} needs key = \"dotted.parameter\"")
     if key not in SCHEMA:
-        raise _unknown(key)
+        raise unknown_key_error(key)
     unit, _ = SCHEMA[key]
     if unit in ("str", "bool", "int", "law"):
         raise ParameterError(f"sweep spec: {key} cannot be swept (only quantities with units can)")
 
     def si(raw):
-        return float(_convert(key, raw, {}))
+        return float(convert_value(key, raw, {}))
 
     if "values" in entry:
         if {"start", "stop", "num", "spacing"} & set(entry):

@@ -1,9 +1,12 @@
 """Checkpoints and the result file.
 
 Each finished chunk of points is written at once to ``OUTPUT.parts/chunk_NNNNNN.npz``
-(to a temporary name, then renamed, so a killed run never leaves half a file). A
-``manifest.json`` holds the spec's digest: a rerun of the same spec skips the chunks on
-disk, and a changed spec is refused rather than mixed with old results. When every
+(to a temporary name, fsync'ed, then renamed, so a killed run never leaves half a file),
+stamped with the spec's digest and a SHA-256 checksum of its arrays. A ``manifest.json``,
+written before the first chunk, holds the digest too: a rerun of the same spec skips the
+intact chunks on disk and computes damaged ones again, and a changed spec is refused
+rather than mixed with old results. ``OUTPUT.lock`` is held while a sweep runs, so a
+second sweep onto the same output is refused. When every
 chunk is there, the parts are streamed one at a time into the netCDF result (written
 through h5netcdf under a temporary name, then renamed), so memory holds one chunk, never
 the whole sweep. The parts are removed once the result is complete.
@@ -11,9 +14,12 @@ the whole sweep. The parts are removed once the result is complete.
 
 from __future__ import annotations
 
+import fcntl
+import hashlib
 import json
 import os
 import shutil
+import zipfile
 from pathlib import Path
 
 import h5netcdf
@@ -22,6 +28,7 @@ import numpy as np
 
 from camdyn import __version__
 from camdyn.errors import ParameterError
+from camdyn.io.atomic import atomic_output, write_text
 from camdyn.sweeps import metrics as M
 from camdyn.sweeps.spec import METRICS, SweepSpec
 
@@ -41,39 +48,111 @@ SOLVER_VARIABLES = {
 
 
 class Checkpoint:
-    """The parts folder of one sweep."""
+    """The parts folder of one sweep, locked for this process while it runs.
 
-    def __init__(self, spec: SweepSpec, restart: bool = False):
+    Parameters
+    ----------
+    spec : SweepSpec
+        The sweep.
+    restart : bool
+        Discard existing parts instead of resuming.
+    say : callable, optional
+        Receives one-line notes (a damaged part that will be computed again).
+
+    Raises
+    ------
+    ParameterError
+        Another process is running a sweep onto the same output, or the parts folder
+        holds parts of a different sweep (rerun with ``--restart`` to discard them).
+    """
+
+    def __init__(self, spec: SweepSpec, restart: bool = False, say=None):
         self.spec = spec
+        self.say = say or (lambda _msg: None)
         self.folder = Path(str(spec.output) + ".parts")
+        self.digest = spec.digest()
+        self._lock = _lock(Path(str(spec.output) + ".lock"))
         manifest = self.folder / "manifest.json"
-        digest = spec.digest()
         if self.folder.exists() and restart:
             shutil.rmtree(self.folder)
         if manifest.exists():
-            old = json.loads(manifest.read_text()).get("digest")
-            if old != digest:
+            try:
+                old = json.loads(manifest.read_text()).get("digest")
+            except (OSError, ValueError):
+                old = None
+            if old != self.digest:
                 raise ParameterError(f"{self.folder} holds checkpoints of a different sweep (digest {old}, this "
-                                     f"spec {digest}); rerun with --restart to discard them")
+                                     f"spec {self.digest}); rerun with --restart to discard them")
         else:
+            foreign = [p.name for p in self.folder.glob("chunk_*.npz") if self._part_digest(p) != self.digest]
+            if foreign:
+                raise ParameterError(f"{self.folder} holds {len(foreign)} checkpoint(s) that are not of this sweep "
+                                     f"(for example {foreign[0]}); rerun with --restart to discard them")
             self.folder.mkdir(parents=True, exist_ok=True)
-            _atomic_text(manifest, json.dumps({"digest": digest, "chunks": spec.chunks, "points": spec.points,
-                                               "camdyn": __version__}))
+            write_text(manifest, json.dumps({"digest": self.digest, "chunks": spec.chunks,
+                                             "points": spec.points, "camdyn": __version__}))
+
+    def close(self) -> None:
+        """Release the output's lock (also released when the process ends, however it ends)."""
+        if self._lock is not None:
+            Path(self._lock.name).unlink(missing_ok=True)
+            self._lock.close()
+            self._lock = None
 
     def path(self, chunk: int) -> Path:
         return self.folder / f"chunk_{chunk:06d}.npz"
 
     def done(self) -> set[int]:
-        return {int(p.stem[6:]) for p in self.folder.glob("chunk_*.npz")}
+        """Chunks whose parts are on disk and intact. A part that cannot be read, belongs to
+        another sweep or fails its checksum is removed (and so computed again)."""
+        good = set()
+        for path in sorted(self.folder.glob("chunk_*.npz")):
+            chunk = int(path.stem[6:])
+            try:
+                self.load(chunk)
+            except ValueError as exc:
+                self.say(f"note: {path.name} is damaged ({exc}); it will be computed again")
+                path.unlink(missing_ok=True)
+                continue
+            good.add(chunk)
+        return good
 
     def save(self, chunk: int, arrays: dict) -> None:
-        tmp = self.folder / f".chunk_{chunk:06d}.{os.getpid()}.tmp.npz"
-        np.savez(tmp, **arrays)
-        os.replace(tmp, self.path(chunk))
+        """Write one chunk's arrays with this sweep's digest and their checksum, atomically."""
+        stamped = dict(arrays, _digest=np.array(self.digest), _checksum=np.array(_checksum(arrays)))
+        with atomic_output(self.path(chunk)) as tmp:
+            with tmp.open("wb") as fh:
+                np.savez(fh, **stamped)
 
     def load(self, chunk: int) -> dict:
-        with np.load(self.path(chunk), allow_pickle=False) as data:
-            return {k: data[k] for k in data.files}
+        """The arrays of one chunk.
+
+        Raises
+        ------
+        ValueError
+            The part is truncated or corrupt, was written by another sweep, or fails its
+            checksum.
+        """
+        try:
+            with np.load(self.path(chunk), allow_pickle=False) as data:
+                arrays = {k: data[k] for k in data.files}
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+            raise ValueError(f"unreadable: {type(exc).__name__}") from None
+        digest = str(arrays.pop("_digest", ""))
+        checksum = str(arrays.pop("_checksum", ""))
+        if digest != self.digest:
+            raise ValueError("written by a different sweep")
+        if checksum != _checksum(arrays):
+            raise ValueError("checksum mismatch")
+        return arrays
+
+    @staticmethod
+    def _part_digest(path: Path) -> str | None:
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                return str(data["_digest"]) if "_digest" in data.files else None
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+            return None
 
     def assemble(self, keep_parts: bool = False) -> Path:
         """Stream every part into the netCDF result; return its path."""
@@ -82,11 +161,10 @@ class Checkpoint:
         if missing:
             raise ParameterError(f"cannot assemble {spec.output}: {len(missing)} chunks are missing")
         out = Path(spec.output)
-        tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
         kept = spec.kept_revolutions
         layout = M.variables(spec.metrics, spec.harmonics, kept)
         dims = [d for d, _ in spec.dimensions]
-        with h5netcdf.File(tmp, "w") as f:
+        with atomic_output(out) as tmp, h5netcdf.File(tmp, "w") as f:
             sizes = dict(spec.dimensions)
             if "poincare" in spec.metrics:
                 sizes["revolution"] = kept
@@ -108,7 +186,6 @@ class Checkpoint:
                 for name, var in variables.items():
                     _write_rows(var, block[name], start, spec.shape)
             f.attrs.update(_global_attributes(spec))
-        os.replace(tmp, out)
         if not keep_parts:
             shutil.rmtree(self.folder, ignore_errors=True)
         return out
@@ -130,10 +207,34 @@ class Checkpoint:
                 parts, size = [], 0
 
 
-def _atomic_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+def _checksum(arrays: dict) -> str:
+    """SHA-256 over the names, dtypes, shapes and bytes of a chunk's arrays."""
+    digest = hashlib.sha256()
+    for name in sorted(arrays):
+        a = np.ascontiguousarray(arrays[name])
+        digest.update(f"{name}|{a.dtype.str}|{a.shape}|".encode())
+        digest.update(a.tobytes())
+    return digest.hexdigest()
+
+
+def _lock(path: Path):
+    """Hold an exclusive lock on ``path`` (a lock file beside the output) for the sweep;
+    the operating system releases it when the process ends, even by SIGKILL."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    handle = path.open("a+")
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        handle.seek(0)
+        owner = handle.read().strip() or "another process"
+        handle.close()
+        raise ParameterError(f"another sweep ({owner}) is writing {path.with_suffix('')}; wait for it to finish "
+                             f"or choose another output") from None
+    handle.seek(0)
+    handle.truncate()
+    handle.write(f"pid {os.getpid()}")
+    handle.flush()
+    return handle
 
 
 def _coordinates(f, spec: SweepSpec) -> None:

@@ -11,7 +11,10 @@ from __future__ import annotations
 
 import atexit
 import os
+import signal
 import sys
+import threading
+import time
 
 import numba
 import numpy as np
@@ -64,6 +67,18 @@ def start_local(threads: int = 1, point=None) -> None:
     """
     warm(threads, point)
     atexit.register(_leave)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)   # the parent handles Ctrl-C and stops the workers
+    threading.Thread(target=_watch_parent, args=(os.getppid(),), daemon=True, name="camdyn-parent-watch").start()
+
+
+def _watch_parent(parent: int, interval: float = 0.5) -> None:
+    """Leave when the parent process is gone, whatever killed it (SIGKILL included): the
+    worker would otherwise wait on its task queue forever. The compiled kernel releases
+    the GIL, so this thread runs while a chunk is computed [interval in s]."""
+    while True:
+        time.sleep(interval)
+        if os.getppid() != parent:
+            os._exit(1)
 
 
 def run_chunk(params: np.ndarray, starts: np.ndarray, periods: np.ndarray, ok: np.ndarray, run: tuple,
