@@ -160,6 +160,42 @@ def test_poincare_period_classification():
     assert list(poincare_period(section, scale)) == [2, 3, 0, 2]
 
 
+def _impact_period(times, hz, start, end, max_k=4):
+    """Smallest k such that every impact onset in [start, end] recurs k cam periods later
+    (to 1e-4 of a period), from the event log alone; 0 if none up to max_k."""
+    period = 1.0 / hz
+    t = times[(times >= start) & (times <= end)]
+    for k in range(1, max_k + 1):
+        earlier = t[t + k * period <= end - 0.5 * period]
+        if all(np.min(np.abs(t - (ti + k * period))) < 1e-4 * period for ti in earlier):
+            return k
+    return 0
+
+
+def test_period_matches_the_impact_sequence(tmp_path):
+    """The sweep's period (from the stroboscopic Poincare section) against the period of
+    the impact sequence of camdyn.simulate over the same window (onset times, located by
+    the event finder, not sampled): 12 Hz one impact per revolution at equal intervals
+    (period 1; its Floquet multipliers are checked in test_chaos.py), 25 Hz one impact
+    every two revolutions (period 2), 18 Hz irregular (no period up to 4, regime 3)."""
+    speeds = (12.0, 18.0, 25.0)
+    spec = spec_from_dict({"system": {"source": "sundar2014-impact", "set": {"cam.runout": "3.5 mm"}},
+                           "vary": [{"key": "motion.speed", "values": [f"{hz} Hz" for hz in speeds]}],
+                           "run": {"revolutions": 300, "discard": 200, "chunk": 3},
+                           "metrics": {"names": ["regime", "impacts"]},
+                           "output": {"path": str(tmp_path / "p.nc")}})
+    out = compute_chunk(spec, 0)
+    rig = camdyn.load_system("sundar2014-impact", {"cam.runout": "3.5 mm"})
+    expected = []
+    for hz in speeds:
+        ds = camdyn.simulate(rig, speed=hz, revolutions=300, rtol=3e-7, atol=1e-10, sample_rate=8 * hz)
+        expected.append(_impact_period(ds.impact_time.values, hz, 200 / hz, 300 / hz))
+    assert expected == [1, 0, 2]
+    assert list(out["period"]) == expected
+    assert list(out["regime"]) == [2, 3, 2]
+    assert out["impacts_per_revolution"][0] == 1.0 and out["impacts_per_revolution"][2] == 0.5
+
+
 # --- execution ---------------------------------------------------------------------------------
 
 def test_local_pool_inline_and_dask_are_bitwise_identical(tmp_path):

@@ -8,7 +8,7 @@ from typing import List, Optional
 
 import typer
 
-from camdyn.cli.common import SetOption, console, load_source, print_json
+from camdyn.cli.common import SetOption, check_outputs, console, load_source, print_json
 from camdyn.errors import ParameterError
 
 _ALIASES = {"speed": "motion.speed"}
@@ -55,8 +55,7 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
     from camdyn.sweeps import spec_from_dict
     from camdyn.sweeps.regime_map import regime_map
 
-    if out.suffix not in (".nc", ".h5"):
-        raise ParameterError(f"--out must end in .nc, got {out.name!r}")
+    check_outputs(netcdf=out, figure=plot or out.with_suffix(".png"))
     first, second = _axis(x, "--x"), _axis(y, "--y")
     if first["key"] == second["key"]:
         raise ParameterError("--x and --y vary the same parameter")
@@ -93,6 +92,7 @@ def spectrum(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     from camdyn.plotting import plot_spectrum
     from camdyn.simulation.runner import simulate
 
+    check_outputs(figure=plot)
     system = load_source(source, set_)
     ds = simulate(system, speed=speed, revolutions=revolutions, sample_rate=parse_hertz(sample_rate))
     if variable not in ds or ds[variable].dims != ("time",):

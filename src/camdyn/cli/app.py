@@ -11,6 +11,7 @@ import functools
 import os
 import signal
 import sys
+import warnings
 
 import typer
 
@@ -73,6 +74,11 @@ def _on_terminate(signum, frame):
     raise KeyboardInterrupt
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings as one line on standard error, without the source line."""
+    print(f"warning: {message}", file=sys.stderr)
+
+
 def _interrupted(exc: BaseException | None) -> int:
     exc = exc or _interrupt["exception"]
     reason = str(exc) if isinstance(exc, SweepInterrupted) else "interrupted"
@@ -89,6 +95,7 @@ def main(argv=None) -> int:
     traceback of an unexpected error.
     """
     _interrupt.update(signal=signal.SIGINT, exception=None)
+    warnings.showwarning = _show_warning
     try:
         previous = signal.signal(signal.SIGTERM, _on_terminate)
     except ValueError:   # not the main thread: leave SIGTERM alone

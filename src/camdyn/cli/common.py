@@ -4,12 +4,13 @@ system from a preset or TOML file, grid and frequency parsing, JSON printing."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import typer
 from rich.console import Console
 
-from camdyn.errors import ParameterError
+from camdyn.errors import OutputError, ParameterError
 from camdyn.params.config import load_system, parse_assignments
 from camdyn.params.units import parse_quantity, parse_speed
 
@@ -49,3 +50,29 @@ def parse_hertz(text: str) -> float:
 def print_json(obj) -> None:
     typer.echo(json.dumps(obj, indent=2, default=lambda o: o.item() if hasattr(o, "item") else str(o)))
 
+
+
+def check_outputs(netcdf: Path | None = None, figure: Path | None = None, record: Path | None = None,
+                  json_file: Path | None = None) -> None:
+    """Refuse, before any work, output paths that cannot be written or whose suffix does
+    not match their format: a netCDF result must end in ``.nc`` (or ``.nc4``, ``.h5``), a
+    figure in an image format matplotlib writes, a record in a record format."""
+    from camdyn.io.atomic import check_writable
+
+    if netcdf is not None:
+        if Path(netcdf).suffix.lower() not in (".nc", ".nc4", ".h5", ".hdf5"):
+            raise OutputError(f"cannot write {netcdf}: results are netCDF files, so the name must end in .nc")
+        check_writable(netcdf)
+    if figure is not None:
+        from camdyn.plotting import figure_format
+
+        figure_format(figure)
+        check_writable(figure)
+    if record is not None:
+        from camdyn.io.measurements import RECORD_SUFFIXES
+
+        if Path(record).suffix.lower() not in RECORD_SUFFIXES:
+            raise OutputError(f"cannot write {record}: a record is .csv, .nc/.h5 or .uff/.unv")
+        check_writable(record)
+    if json_file is not None:
+        check_writable(json_file)

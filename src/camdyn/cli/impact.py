@@ -11,7 +11,7 @@ from typing import List, Optional
 import typer
 from rich.table import Table
 
-from camdyn.cli.common import SetOption, console, load_source, print_json
+from camdyn.cli.common import SetOption, check_outputs, console, load_source, print_json
 from camdyn.errors import ParameterError
 from camdyn.params.units import parse_quantity, parse_speed
 
@@ -96,6 +96,7 @@ def identify_restitution(
     from camdyn.identification.restitution import estimate_restitution
     from camdyn.io.measurements import read_measurement
 
+    check_outputs(figure=plot)
     system = load_source(source, set_)
     est = estimate_restitution(system, read_measurement(data), speed=parse_speed(speed) if speed else None)
     if plot is not None:

@@ -15,6 +15,7 @@ from rich.table import Table
 
 from camdyn.cli.common import (
     SetOption,
+    check_outputs,
     console,
     load_source,
     parse_grid,
@@ -44,6 +45,7 @@ def synthesize(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     from camdyn.records.synthesis import synthesize as make
     from camdyn.records.synthesis import synthesize_impact_map
 
+    check_outputs(record=out)
     system = load_source(source, set_)
     rate = parse_hertz(sample_rate)
     if restitution_gamma is not None:
@@ -67,6 +69,7 @@ def synthesize_impulse(damping: float = typer.Option(0.02, help="Damping ratio o
     from camdyn.identification.modal import synthesize_impulse_test
     from camdyn.io.measurements import write_measurement
 
+    check_outputs(record=out)
     rec = synthesize_impulse_test(damping_ratios=(damping, 0.02), duration=duration,
                                   sample_rate=parse_hertz(sample_rate), noise=noise)
     write_measurement(rec, out)
@@ -113,6 +116,7 @@ def identify_modal(data: Path = typer.Argument(..., help="Impulse test: force [N
     from camdyn.identification.modal import accelerance, half_power_damping
     from camdyn.io.measurements import read_measurement
 
+    check_outputs(figure=plot)
     rec = read_measurement(data)
     freq, h = accelerance(rec)
     limits = None
@@ -143,6 +147,7 @@ def tribology(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     """Hertz pressure, velocities, slide-to-roll ratio, film thickness and lubrication regime."""
     from camdyn.tribology import contact_conditions, lubrication_regime
 
+    check_outputs(figure=plot)
     system = load_source(source, set_)
     ds = contact_conditions(system, parse_speed(speed) if speed else None,
                             None if lubricant == "none" else lubricant, finish)
@@ -190,6 +195,7 @@ def design(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     from camdyn.plotting import plot_design_map
     from camdyn.tribology.design import design_map
 
+    check_outputs(netcdf=out, figure=plot)
     system = load_source(source, set_)
     grid_r = parse_grid(ratios, "ratios")
     grid_s = parse_grid(speeds, "speeds", "Hz")

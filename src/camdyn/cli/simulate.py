@@ -10,7 +10,7 @@ from typing import List, Optional
 import typer
 from rich.table import Table
 
-from camdyn.cli.common import SetOption, console, load_source
+from camdyn.cli.common import SetOption, check_outputs, console, load_source
 from camdyn.params.config import (
     SCHEMA,
     list_presets,
@@ -142,6 +142,7 @@ def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              json_out: bool = typer.Option(False, "--json", help="Print a JSON summary.")):
     """Simulate the follower and summarise the response."""
     from camdyn.simulation.runner import simulate as run
+    check_outputs(netcdf=out, figure=plot)
     system = load_source(source, set_)
     fs = parse_quantity(sample_rate, "Hz", "--sample-rate")
     if speed is not None:

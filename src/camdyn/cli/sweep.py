@@ -8,8 +8,7 @@ from typing import List, Optional
 
 import typer
 
-from camdyn.cli.common import SetOption, console, parse_grid
-from camdyn.errors import ParameterError
+from camdyn.cli.common import SetOption, check_outputs, console, parse_grid
 from camdyn.sweeps.metrics import REGIMES
 
 
@@ -33,9 +32,8 @@ def sweep(spec_path: Path = typer.Argument(..., metavar="SPEC.toml", help="Sweep
 
     spec = load_spec(spec_path)
     if out is not None:
-        if out.suffix not in (".nc", ".h5"):
-            raise ParameterError(f"--out must end in .nc, got {out.name!r}")
         spec = dataclasses.replace(spec, output=out)
+    check_outputs(netcdf=spec.output, figure=None if no_plot else plot or spec.output.with_suffix(".png"))
     ds = run_sweep(spec, workers=workers, dask=dask, threads=threads, progress=not quiet, restart=restart,
                    keep_parts=keep_parts, echo=lambda msg: console.print(msg, highlight=False, soft_wrap=True))
     failed = int((ds["status"] != 0).sum())
@@ -69,6 +67,7 @@ def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     from camdyn.plotting import plot_sweep
     from camdyn.sweeps import run_sweep, spec_from_dict
 
+    check_outputs(netcdf=out, figure=plot or out.with_suffix(".png"))
     grid = parse_grid(speeds, "--speeds", "Hz")
     table = {"system": {"source": source, "set": parse_assignments(set_)},
              "vary": [{"key": "motion.speed", "values": [float(v) for v in grid]}],

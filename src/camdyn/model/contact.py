@@ -9,7 +9,7 @@ Hertz (eqs 2.13-2.14, 3.11-3.13), with ``1/E* = (1-nu_c^2)/Y_c + (1-nu_b^2)/Y_b`
 Damping laws (thesis 2.3.4, 3.2): A viscous, B ``beta F_k(delta)``, C Zhang-Whiten
 ``beta delta^0.25``, D = B compressing / A restoring, E = C compressing / A restoring,
 the generalized ``beta delta^n delta_dot`` (thesis eq 3.2), and the restitution-parameterised
-laws ``F_d = chi(e) K delta^nH delta_dot / v_approach``. Each law is a row of
+laws ``F_d = chi(e) K delta^nH delta_dot / v_approach`` (docs/model.md §3.4). Each law is a row of
 :data:`camdyn.params.laws.TABLE`: the integer codes dispatched on below and the factors
 ``chi(e)`` (compiled here from the rows' functions) come from there.
 """

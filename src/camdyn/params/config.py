@@ -50,7 +50,7 @@ _META_KEYS = {"preset.name", "preset.citation", "preset.description"}
 
 def beta_unit(law: str, exponent: float) -> str:
     """Unit of ``contact.beta`` [pint text] for a damping law (name or alias) and the
-    power-law exponent ``n`` = ``exponent`` [-] (docs/model.md §3; the law's row of
+    power-law exponent ``n`` = ``exponent`` [-] (docs/model.md §3.4; the law's row of
     :data:`camdyn.params.laws.TABLE`)."""
     return lookup(law).unit_of_beta(exponent)
 
@@ -247,8 +247,8 @@ def system_to_toml(system: System) -> str:
     """Write a system as TOML text with units, readable by :func:`load_system`.
 
     Every parameter of :data:`PARAMETERS` is written in its group's table, in the unit
-    its field declares; a circular cam is written with ``radius``, an unset optional
-    parameter is left out.
+    its field declares; a cam with equal semi-axes is written with ``radius``, an unset
+    optional parameter is left out.
     """
     lines = ["[preset]", f"name = {_text(system.name)}", f"citation = {_text(system.citation)}"]
     table = ""
@@ -265,7 +265,8 @@ def system_to_toml(system: System) -> str:
 def _written(param: Parameter, system: System) -> list[str]:
     """The TOML lines of one parameter (none, one, or ``radius`` for both semi-axes)."""
     value = param.getter(system)
-    if param.key in ("cam.semi_major", "cam.semi_minor") and system.cam.is_circle:
+    # radius only for exactly equal semi-axes (``Cam.is_circle`` allows rounding): it reads back as both
+    if param.key in ("cam.semi_major", "cam.semi_minor") and system.cam.semi_major == system.cam.semi_minor:
         return [f"radius = {_quantity(value, 'm')}"] if param.key == "cam.semi_major" else []
     if value is None and param.optional:
         return []

@@ -1,4 +1,4 @@
-"""The contact damping laws, one row each (docs/model.md §3; thesis 2.3.4 and 3.2).
+"""The contact damping laws, one row each (docs/model.md §3.4; thesis 2.3.4 and 3.2).
 
 Every property of a damping law is read from its row in :data:`TABLE`: its name and
 aliases, the integer code the compiled core dispatches on
@@ -14,9 +14,9 @@ The damping force is ``F_d = c delta_dot`` [N] with ``delta_dot`` [m/s] and:
 - ``none``: ``c = 0``;
 - ``viscous`` (A): ``c = 2 zeta omega_n I_P / chi*^2`` (thesis eq 2.24, 4.20);
 - ``stiffness-proportional`` (B): ``c = beta F_k(delta)`` (thesis eq 2.25), beta [s/m];
-- ``zhang-whiten`` (C): ``c = beta delta^0.25``, beta [N s/m^1.25];
-- ``stiffness-proportional-viscous`` (D): B while compressing, A while restoring;
-- ``zhang-whiten-viscous`` (E): C while compressing, A while restoring;
+- ``zhang-whiten`` (C): ``c = beta delta^0.25`` (thesis eq 2.26), beta [N s/m^1.25];
+- ``stiffness-proportional-viscous`` (D): B while compressing, A while restoring (thesis eq 2.27);
+- ``zhang-whiten-viscous`` (E): C while compressing, A while restoring (thesis eq 2.28);
 - ``power`` (``generalized``): ``c = beta delta^n`` (thesis eq 3.2, 3.14), beta [N s/m^(n+1)];
 - restitution laws: ``c = chi(e) K delta^nH / v_approach``, with ``K delta^nH = F_k`` the
   Hertz force and ``v_approach`` [m/s] the approach velocity of the contact.
@@ -24,7 +24,9 @@ The damping force is ``F_d = c delta_dot`` [N] with ``delta_dot`` [m/s] and:
 The rows of the restitution laws give ``chi(e)`` as a function, as the reference writes
 it, and the reference's DOI. The factor functions are plain Python with numba-compatible
 arithmetic: the compiled core compiles these same functions, so each relation is
-written once.
+written once. numba freezes the codes and factors into its on-disk cache and checks only
+the compiled modules' own files for changes: after changing a row's code or factor,
+delete its cache (the ``*.nbi`` and ``*.nbc`` files in camdyn's ``__pycache__`` folders).
 """
 
 from __future__ import annotations
@@ -129,12 +131,12 @@ TABLE: tuple[DampingLaw, ...] = (
                needs_damping_ratio=True),
     DampingLaw("stiffness-proportional", 2, "c = beta F_k(delta) (thesis eq 2.25)", aliases=("B",),
                beta_unit="s/m", uses_beta=True),
-    DampingLaw("zhang-whiten", 3, "c = beta delta^0.25 (Zhang and Whiten)", aliases=("C",),
+    DampingLaw("zhang-whiten", 3, "c = beta delta^0.25 (thesis eq 2.26)", aliases=("C",),
                beta_unit="N*s/m**1.25", uses_beta=True),
-    DampingLaw("stiffness-proportional-viscous", 4, "law B while compressing, law A while restoring",
+    DampingLaw("stiffness-proportional-viscous", 4, "law B while compressing, law A while restoring (thesis eq 2.27)",
                aliases=("D",), beta_unit="s/m", uses_beta=True, needs_damping_ratio=True),
-    DampingLaw("zhang-whiten-viscous", 5, "law C while compressing, law A while restoring", aliases=("E",),
-               beta_unit="N*s/m**1.25", uses_beta=True, needs_damping_ratio=True),
+    DampingLaw("zhang-whiten-viscous", 5, "law C while compressing, law A while restoring (thesis eq 2.28)",
+               aliases=("E",), beta_unit="N*s/m**1.25", uses_beta=True, needs_damping_ratio=True),
     DampingLaw("power", 6, "c = beta delta^n (thesis eq 3.2, 3.14)", aliases=("generalized",),
                beta_unit="N*s/m**{n_plus_one!r}", uses_beta=True),
     DampingLaw("hunt-crossley", 7, "c = chi(e) F_k(delta) / v_approach", restitution=hunt_crossley_factor,

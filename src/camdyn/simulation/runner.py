@@ -21,6 +21,7 @@ from camdyn.model.outputs import CHANNELS, derived
 from camdyn.params.config import system_to_toml
 from camdyn.params.system import System
 from camdyn.params.units import parse_speed
+from camdyn.simulation import limits
 from camdyn.systems import registry as systems
 
 __all__ = ["simulate", "prepare", "impact_table", "Prepared", "penetration_resolution"]
@@ -146,12 +147,14 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
         and ``long_name``; over ``impact``: the impact table. Attributes record the
         parameters (as TOML), the solver counters and the static equilibrium.
     """
+    limits.check_system(system)
     system = with_speed(system, speed)
     if method not in METHODS:
         raise ParameterError(f"method must be one of {sorted(METHODS)}, got {method!r}")
-    for name, val in (("rtol", rtol), ("atol", atol), ("sample_rate", sample_rate)):
-        if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
-            raise ParameterError(f"{name} must be a positive number, got {val!r}")
+    limits.check_tolerances(rtol, atol)
+    revolutions = limits.check_number("revolutions", revolutions)
+    if duration is not None:
+        duration = limits.check_number("duration", duration, "s")
     period = system.motion.period
     if duration is None:
         if not math.isfinite(period):
@@ -161,13 +164,14 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
         duration = revolutions * period
     if not (math.isfinite(duration) and duration > 0):
         raise ParameterError(f"duration must be positive, got {duration!r}")
+    n_out = limits.check_sampling(sample_rate, period, duration)
+    limits.check_memory(limits.result_bytes(n_out, 3 + len(CHANNELS)), "the simulation's result")
     prep = prepare(system)
     y0 = prep.y0.copy()
     if initial_state is not None:
         y0[0], y0[1] = float(initial_state[0]), float(initial_state[1])
         if not np.all(np.isfinite(y0)):
             raise ParameterError("initial_state must be finite")
-    n_out = int(math.floor(duration * sample_rate + 1e-9)) + 1
     t_out = np.minimum(np.arange(n_out) / sample_rate, duration)  # the last sample may round past the end
     if max_step is None:
         max_step = period / 32.0 if math.isfinite(period) else duration / 64.0

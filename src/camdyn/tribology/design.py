@@ -39,6 +39,7 @@ AXES = {
 
 
 def _system_at(system: System, axis: str, ratio: float) -> System:
+    """The rig with runout ``e = ratio a`` or semi-minor axis ``b = ratio a`` [m]."""
     a = system.cam.semi_major
     if axis == "runout":
         return system.with_values(**{"cam.runout": ratio * a})
@@ -84,18 +85,7 @@ def design_map(system: System, axis: str, ratios, speeds, lubricant=None, roughn
         criteria and the recommended point (``recommended_ratio``, ``recommended_speed``;
         NaN when no point is admissible).
     """
-    if axis not in AXES:
-        raise ParameterError(f"axis must be one of {sorted(AXES)}, got {axis!r}")
-    ratios = np.atleast_1d(np.asarray(ratios, float))
-    speeds = np.atleast_1d(np.asarray(speeds, float))
-    if ratios.size == 0 or speeds.size == 0 or not (np.all(np.isfinite(ratios)) and np.all(speeds > 0)):
-        raise ParameterError("the design grid needs finite ratios and positive speeds")
-    if axis == "axis_ratio" and (np.any(ratios <= 0) or np.any(ratios > 1)):
-        raise ParameterError("axis ratios b/a must lie in (0, 1]")
-    if axis == "runout" and np.any(ratios < 0):
-        raise ParameterError("runout ratios e/a must be non-negative")
-    if regime not in (None, "boundary", "mixed", "EHL"):
-        raise ParameterError(f"regime must be boundary, mixed or EHL, got {regime!r}")
+    ratios, speeds = _checked_grid(axis, ratios, speeds, regime)
     shape = (ratios.size, speeds.size)
     layers = {name: np.zeros(shape, bool) for name in ("contact_kept", "sliding_reversal", "harmonics_clear",
                                                       "regime_ok")}
@@ -121,13 +111,46 @@ def design_map(system: System, axis: str, ratios, speeds, lubricant=None, roughn
                 progress(done, total)
     admissible = (layers["contact_kept"] & ~layers["sliding_reversal"] & layers["harmonics_clear"]
                   & layers["regime_ok"])
+    rec_ratio, rec_speed = _recommended(admissible, values, ratios, speeds, contact_margin)
+    ds = _dataset(ratios, speeds, axis, layers, values, admissible, fn_hz, harmonic_margin)
+    ds.attrs.update(axis=axis, harmonic_margin=harmonic_margin, contact_margin=contact_margin,
+                    regime=regime or "any", lubricant=str(getattr(lubricant, "name", lubricant) or "none"),
+                    recommended_ratio=rec_ratio, recommended_speed=rec_speed, system=system.name)
+    return ds
+
+
+def _checked_grid(axis: str, ratios, speeds, regime: str | None) -> tuple[np.ndarray, np.ndarray]:
+    """The grid's ratios [-] and speeds [Hz] as arrays, after checking the arguments of
+    :func:`design_map`."""
+    if axis not in AXES:
+        raise ParameterError(f"axis must be one of {sorted(AXES)}, got {axis!r}")
+    ratios = np.atleast_1d(np.asarray(ratios, float))
+    speeds = np.atleast_1d(np.asarray(speeds, float))
+    if ratios.size == 0 or speeds.size == 0 or not (np.all(np.isfinite(ratios)) and np.all(speeds > 0)):
+        raise ParameterError("the design grid needs finite ratios and positive speeds")
+    if axis == "axis_ratio" and (np.any(ratios <= 0) or np.any(ratios > 1)):
+        raise ParameterError("axis ratios b/a must lie in (0, 1]")
+    if axis == "runout" and np.any(ratios < 0):
+        raise ParameterError("runout ratios e/a must be non-negative")
+    if regime not in (None, "boundary", "mixed", "EHL"):
+        raise ParameterError(f"regime must be boundary, mixed or EHL, got {regime!r}")
+    return ratios, speeds
+
+
+def _recommended(admissible: np.ndarray, values: dict, ratios: np.ndarray, speeds: np.ndarray,
+                 contact_margin: float) -> tuple[float, float]:
+    """The recommended ratio [-] and speed [Hz]: the admissible point with the largest
+    first harmonic whose normal force keeps the margin (NaN, NaN without one)."""
     score = np.where(admissible & (values["min_contact_force"] >= contact_margin * values["mean_contact_force"]),
                      values["first_harmonic"], -np.inf)
     if np.isfinite(score).any():
-        bi, bj = np.unravel_index(np.argmax(score), shape)
-        rec_ratio, rec_speed = float(ratios[bi]), float(speeds[bj])
-    else:
-        rec_ratio = rec_speed = math.nan
+        bi, bj = np.unravel_index(np.argmax(score), admissible.shape)
+        return float(ratios[bi]), float(speeds[bj])
+    return math.nan, math.nan
+
+
+def _dataset(ratios, speeds, axis, layers, values, admissible, fn_hz, harmonic_margin) -> xr.Dataset:
+    """The criteria of :func:`design_map` as a Dataset over (``ratio``, ``speed``)."""
     dims = ("ratio", "speed")
     ds = xr.Dataset(coords={"ratio": ("ratio", ratios, {"units": "1", "long_name": AXES[axis]}),
                             "speed": ("speed", speeds, {"units": "Hz", "long_name": "cam speed"})})
@@ -143,13 +166,12 @@ def design_map(system: System, axis: str, ratios, speeds, lubricant=None, roughn
     for name, arr in values.items():
         ds[name] = (dims, arr, {"units": units[name][0], "long_name": units[name][1]})
     ds["natural_frequency"] = ("ratio", fn_hz, {"units": "Hz", "long_name": "linearized natural frequency"})
-    ds.attrs.update(axis=axis, harmonic_margin=harmonic_margin, contact_margin=contact_margin,
-                    regime=regime or "any", lubricant=str(getattr(lubricant, "name", lubricant) or "none"),
-                    recommended_ratio=rec_ratio, recommended_speed=rec_speed, system=system.name)
     return ds
 
 
 def _point(system, speed, natural_hz, i, j, layers, values, lubricant, roughness, regime, margin, points):
+    """Evaluate the criteria at one grid point (``speed`` [Hz], ``natural_hz`` [Hz]) into
+    ``layers[name][i, j]`` and ``values[name][i, j]``."""
     ik = inverse_kinematics(system, speed=speed, points=points)
     fn = ik["Fn"].values
     acc = ik["alpha_ddot"].values

@@ -1,0 +1,132 @@
+"""Checks a simulation request passes before any work or memory is spent on it.
+
+A request is refused (:class:`~camdyn.errors.ParameterError`) when its tolerances are
+meaningless, when the sample rate cannot resolve the cam's motion, or when its result
+would not fit in the memory this machine has free; it is warned about
+(:class:`LargeResultWarning`) when the result is large.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import warnings
+
+import numpy as np
+
+from camdyn.errors import ParameterError
+from camdyn.params.system import System
+
+__all__ = ["LargeResultWarning", "check_number", "check_system", "check_tolerances", "check_sampling",
+           "result_bytes", "available_memory",
+           "check_memory", "RTOL_RANGE", "ATOL_RANGE", "MIN_SAMPLES_PER_PERIOD", "WARN_BYTES"]
+
+#: Sensible relative tolerances [-]: tighter than 1e-14 is below double precision's
+#: resolution of the state; looser than 1e-2 no longer resolves the contact.
+RTOL_RANGE = (1e-14, 1e-2)
+#: Sensible absolute tolerances on the angle and rate [rad, rad/s].
+ATOL_RANGE = (1e-16, 1e-3)
+#: Fewest output samples per cam period: four resolve the first cam harmonic without
+#: aliasing onto the mean [-].
+MIN_SAMPLES_PER_PERIOD = 4
+#: Samples per period below which a warning says which harmonics are lost [-].
+WARN_SAMPLES_PER_PERIOD = 64
+#: Result size above which a warning names it [B].
+WARN_BYTES = 500e6
+#: Bytes per output sample and channel, with the temporaries of assembling the result.
+BYTES_PER_VALUE = 8 * 3
+
+
+class LargeResultWarning(UserWarning):
+    """A result, or a sampling choice, that the user should know about before waiting."""
+
+
+def check_number(name: str, value, unit: str = "") -> float:
+    """``value`` as a float, or a ParameterError naming ``name`` when it is not a real number."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ParameterError(f"{name} must be a number{f' of {unit}' if unit else ''}, got {value!r}")
+    return float(value)
+
+
+def check_system(system) -> None:
+    """Refuse anything but a :class:`~camdyn.params.system.System`."""
+    if not isinstance(system, System):
+        hint = (" (load it first: camdyn.load_system(" + repr(system) + "))") if isinstance(system, str) else ""
+        raise ParameterError(f"expected a camdyn System, got {type(system).__name__}{hint}")
+
+
+def check_tolerances(rtol: float, atol: float) -> None:
+    """Refuse tolerances outside :data:`RTOL_RANGE` and :data:`ATOL_RANGE`."""
+    for name, value, (low, high), unit in (("rtol", rtol, RTOL_RANGE, ""), ("atol", atol, ATOL_RANGE, " rad")):
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and low <= value <= high):
+            raise ParameterError(f"{name} = {value!r} is outside the sensible range {low:g} to {high:g}{unit}: "
+                                 f"tighter is below double precision, looser does not resolve the contact")
+
+
+def check_sampling(sample_rate: float, period: float, duration: float) -> int:
+    """Refuse a sample rate that cannot resolve the cam's motion; return the sample count.
+
+    Parameters
+    ----------
+    sample_rate : float
+        Output sampling rate [Hz].
+    period : float
+        Cam period [s] (infinite for a cam at rest).
+    duration : float
+        Length of the run [s].
+    """
+    if not (isinstance(sample_rate, (int, float)) and math.isfinite(sample_rate) and sample_rate > 0):
+        raise ParameterError(f"sample_rate must be a positive number of Hz, got {sample_rate!r}")
+    if math.isfinite(period):
+        per_period = sample_rate * period
+        if per_period < MIN_SAMPLES_PER_PERIOD:
+            raise ParameterError(
+                f"a sample rate of {sample_rate:g} Hz gives {per_period:.3g} samples per cam period "
+                f"({1 / period:g} Hz): at least {MIN_SAMPLES_PER_PERIOD} are needed to resolve the cam's first "
+                f"harmonic; raise the sample rate above {MIN_SAMPLES_PER_PERIOD / period:g} Hz")
+        if per_period < WARN_SAMPLES_PER_PERIOD:
+            warnings.warn(f"{per_period:.3g} samples per cam period resolve cam harmonics only up to order "
+                          f"{int(per_period // 2)}", LargeResultWarning, stacklevel=3)
+    samples = duration * sample_rate
+    if samples > 2 ** 62:
+        raise ParameterError(f"{duration:g} s at {sample_rate:g} Hz is {samples:.3g} samples; that is not a run "
+                             f"this machine can hold")
+    return int(math.floor(samples + 1e-9)) + 1
+
+
+def result_bytes(samples: int, channels: int) -> int:
+    """Memory a result of ``samples`` samples of ``channels`` channels needs [B]."""
+    return int(samples) * int(channels) * BYTES_PER_VALUE
+
+
+def available_memory() -> int:
+    """Memory available to new allocations [B] (Linux ``MemAvailable``; -1 if unknown)."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return -1
+
+
+def check_memory(needed: int, what: str) -> None:
+    """Refuse a result that does not fit in the free memory; warn when it is large.
+
+    Parameters
+    ----------
+    needed : int
+        Estimated size [B].
+    what : str
+        What the memory is for, for the messages (e.g. "the simulation's result").
+    """
+    free = available_memory()
+    if free >= 0 and needed > 0.8 * free:
+        raise ParameterError(f"{what} needs about {needed / 1e9:.3g} GB but only {free / 1e9:.3g} GB of memory "
+                             f"are free; shorten the run or lower the sample rate")
+    if needed > WARN_BYTES:
+        warnings.warn(f"{what} will take about {needed / 1e6:.0f} MB of memory", LargeResultWarning, stacklevel=3)
