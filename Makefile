@@ -12,7 +12,7 @@ $(BIN)/.installed: pyproject.toml
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $@
 
-.PHONY: demo test bench install clean
+.PHONY: demo test bench install clean mutation
 install: $(BIN)/.installed
 
 demo: $(BIN)/.installed
@@ -22,6 +22,10 @@ test: $(BIN)/.installed
 	$(BIN)/ruff check src tests benchmarks examples
 	$(BIN)/lint-imports
 	$(BIN)/python -m pytest -q
+
+# deliberate physics mistakes (tools/mutation_check.py) must make a fast test subset fail
+mutation: $(BIN)/.installed
+	$(BIN)/python tools/mutation_check.py
 
 bench: $(BIN)/.installed
 	$(BIN)/python benchmarks/bench_simulate.py

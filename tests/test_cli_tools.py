@@ -99,7 +99,9 @@ def test_identify_impact_damping_and_restitution(tmp_path, capsys):
                  "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["gamma"] == pytest.approx(0.8, rel=0.05)
-    assert out["beta_hunt_crossley"] == pytest.approx(1.5 * out["gamma"] * out["stiffness"])
+    # the Hunt-Crossley equivalent of the true law: (3/2) 0.8 s/m x 8.0 GN/m^1.5 (thesis 3.8.3),
+    # within the 5 % of gamma and 1 % of K
+    assert out["beta_hunt_crossley"] == pytest.approx(1.5 * 0.8 * 8.0e9, rel=0.06)
 
 
 def test_identify_impact_damping_refusal_is_one_line(tmp_path):

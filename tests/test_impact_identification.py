@@ -62,13 +62,18 @@ def test_beta_with_n_fixed(thesis_events, point):
 @pytest.mark.parametrize("point", range(4))
 def test_damping_at_peak_with_n_free(thesis_events, point):
     """with n free, beta * delta_peak^n within 5 % of the true law's damping at
-    the same penetration; the bootstrap interval is reported."""
+    the same penetration. The bootstrap's 95 % interval must not understate the error
+    badly: the true damping lies within 3 half-widths of the estimate. (The bootstrap
+    resamples impacts, so it misses the error all impacts of a record share, such as
+    their common noise-fitted onset states: at e/rc = 0.10 and 0.15 the truth lies
+    outside the interval, at 1.5 and 1.6 half-widths, measured; errors 0.05-0.22 %.)"""
     ev = thesis_events[point]
     est = estimate_impact_damping(ev.system, None, events=[ev], bootstrap=16)
     truth = BETA * est.peak_penetration ** 1.5
     assert abs(est.damping_at_peak / truth - 1) < 0.05
     lo, hi = est.confidence["damping_at_peak"]
-    assert lo <= est.damping_at_peak * 1.001 and hi >= est.damping_at_peak * 0.999
+    assert lo < hi
+    assert abs(est.damping_at_peak - truth) <= 3 * (hi - lo) / 2
     # the peak penetration is the operating one: 30-50 um at these points
     assert 25e-6 < est.peak_penetration < 60e-6
 
@@ -164,14 +169,16 @@ def test_impact_simulation_matches_the_full_simulation(impact_rig):
 @pytest.mark.parametrize("ratio,speed", POINTS)
 def test_restitution_gamma_table_3_3(impact_rig, ratio, speed):
     """Table 3.3: gamma = 0.8 s/m of simulation S3 recovered within 5 % (1 % noise) at the
-    four operating points, and the Hunt-Crossley equivalent beta = 1.5 gamma K with
-    K = 8.0 GN/m^1.5 (3.8.3)."""
+    four operating points, with the thesis's Hertz coefficient K = 8.0 GN/m^1.5 (3.8.3);
+    the reported Hunt-Crossley equivalent is that of the true law, beta = (3/2) gamma K
+    (Hunt and Crossley 1975) = 1.5 * 0.8 * 8.0 = 9.6 GN s/m^2.5, within the 5 % of gamma
+    and the 1 % of K."""
     system = impact_rig.with_values(**{"cam.runout": ratio * RC})
     rec = synthesize_impact_map(system, speed, revolutions=21, gamma=0.8, noise=0.01)
     est = estimate_restitution(system, rec)
     assert abs(est.gamma / 0.8 - 1) < 0.05
     assert est.stiffness == pytest.approx(8.0e9, rel=0.01)
-    assert est.beta_hunt_crossley == pytest.approx(1.5 * est.gamma * est.stiffness)
+    assert est.beta_hunt_crossley == pytest.approx(9.6e9, rel=0.06)
     d = est.to_dict()
     assert {"gamma", "beta_hunt_crossley"} <= set(d)
 
@@ -220,15 +227,34 @@ def test_pulsed_impact_map_is_one_consistent_motion(impact_rig):
 
 
 def test_impact_map_restitution_law(impact_rig):
-    """S3 applies xi = 1 - gamma v_a at every impact (eq 3.24-3.27): the separation
-    velocity it logs is -xi times the approach velocity, with xi from the law."""
+    """S3 applies xi = 1 - gamma v_a at every impact (eqs 3.24-3.27), read off the motion
+    itself, not the impact log: the penetration rate delta_dot = -alpha_dot chi - n . v_cam
+    just before and just after each onset, from the recorded alpha, alpha_dot and cam
+    angle (1 MHz samples, each side extrapolated linearly to the onset), must satisfy
+    -delta_dot(after) = (1 - gamma v_a) v_a with v_a = delta_dot(before). The start from
+    rest gives approach velocities of 0.46-0.78 m/s (xi 0.38-0.63). Measured agreement
+    4e-9; 1e-6 allowed (the extrapolation over 1 us of flight)."""
+    from camdyn.model import layout as L
+    from camdyn.model.geometry import contact_kinematics
     from camdyn.simulation.impact_map import simulate_impact_map
-    ds = simulate_impact_map(impact_rig, 15.0, revolutions=20, gamma=0.8, sample_rate=2000)
-    va = ds["impact_approach_velocity"].values
-    xi = ds["impact_restitution"].values
-    assert va.size >= 15
-    np.testing.assert_allclose(xi, 1 - 0.8 * va, rtol=1e-12)
-    np.testing.assert_allclose(ds["impact_separation_velocity"].values, xi * va, rtol=1e-12)
+    ds = simulate_impact_map(impact_rig, 15.0, revolutions=8, gamma=0.8, sample_rate=1e6)
+    p = L.pack(impact_rig.with_values(**{"motion.speed": 15.0}))
+    t, alpha, alpha_dot, theta = (ds[k].values for k in ("time", "alpha", "alpha_dot", "cam_angle"))
+    omega = 2 * math.pi * 15.0
+
+    def rate_at(t_hit, i, j):
+        """delta_dot at t_hit, extrapolated from samples i and j (on one side of it)."""
+        ri, rj = (contact_kinematics(alpha[k], alpha_dot[k], theta[k], omega, p)[1] for k in (i, j))
+        return ri + (rj - ri) * (t_hit - t[i]) / (t[j] - t[i])
+
+    hits = ds["impact_time"].values
+    assert hits.size >= 6
+    for t_hit in hits:
+        i = np.searchsorted(t, t_hit, side="right")      # first sample after the onset
+        approach = rate_at(t_hit, i - 1, i - 2)
+        separation = -rate_at(t_hit, i, i + 1)
+        assert 0.3 < approach < 1.0
+        assert separation == pytest.approx((1 - 0.8 * approach) * approach, rel=1e-6)
 
 
 # --- refusals -------------------------------------------------------------------------

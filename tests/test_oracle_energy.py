@@ -15,8 +15,10 @@ def compare_with_reference(system, revolutions, speed, fs=20e3):
     prep = prepare(system)
     ds = camdyn.simulate(system, revolutions=revolutions, sample_rate=fs, rtol=1e-11, atol=1e-13)
     t = ds.time.values
-    # the oracle computes its own viscous coefficient (eq 2.24) from its own equilibrium
-    _, ref, info = reference_simulate(system, prep.theta0, prep.y0, t[-1], t,
+    # The viscous coefficient (eq 2.24) is given to the oracle: these runs bounce, which
+    # amplifies the ~1e-8 by which the two implementations' coefficients differ (finite
+    # differences) beyond the tolerances below; test_oracle_laws.py compares the coefficients.
+    _, ref, info = reference_simulate(system, prep.theta0, prep.y0, t[-1], t, prep.viscous_c,
                                       method="DOP853", rtol=1e-12, atol=1e-14)
     return ds, ref, info
 
@@ -88,7 +90,7 @@ def test_oscillating_cam_agrees_with_scipy(friction_rig):
     prep = prepare(s)
     ds = camdyn.simulate(s, revolutions=0.12, sample_rate=20e3, rtol=1e-11, atol=1e-13)
     t = ds.time.values
-    _, ref, _ = reference_simulate(s, prep.theta0, prep.y0, t[-1], t, method="DOP853",
+    _, ref, _ = reference_simulate(s, prep.theta0, prep.y0, t[-1], t, prep.viscous_c, method="DOP853",
                                    rtol=1e-12, atol=1e-14)
     scale = np.max(np.abs(ref[0]))
     np.testing.assert_allclose(ds.alpha.values, ref[0], rtol=0, atol=1e-6 * scale)

@@ -101,8 +101,7 @@ def test_reaction_is_newton_euler(run):
     # the terms that a wrong formula would drop or flip are present, far above the tolerance
     assert np.max(np.abs(ne["inertia"])) > PRESENT * tol
     assert np.max(np.abs(ne["centripetal"])) > PRESENT * tol
-    if system.friction.coefficient > 0:
-        assert np.max(np.abs(ne["friction"])) > PRESENT * tol
+    assert np.max(np.abs(ne["friction"])) > PRESENT * tol
 
 
 def test_inverse_recovers_the_contact_forces_from_the_independent_reaction(run):
@@ -131,8 +130,7 @@ def test_acceleration_is_the_moment_balance_with_independent_geometry_and_spring
     np.testing.assert_allclose(ds.alpha_ddot.values, ne["alpha_ddot"], rtol=0, atol=ROUNDING * ne["moment_scale"])
     # the friction moment Ff h alone is far above that tolerance
     friction = np.max(np.abs(ds.Ff.values)) * system.follower.surface_offset / system.follower.inertia
-    if system.friction.coefficient > 0:
-        assert friction > PRESENT * ROUNDING * ne["moment_scale"]
+    assert friction > PRESENT * ROUNDING * ne["moment_scale"]
 
 
 def test_acceleration_channel_is_the_derivative_of_the_rate(friction_rig):

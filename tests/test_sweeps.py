@@ -188,7 +188,7 @@ def test_period_matches_the_impact_sequence(tmp_path):
     rig = camdyn.load_system("sundar2014-impact", {"cam.runout": "3.5 mm"})
     expected = []
     for hz in speeds:
-        ds = camdyn.simulate(rig, speed=hz, revolutions=300, rtol=3e-7, atol=1e-10, sample_rate=8 * hz)
+        ds = camdyn.simulate(rig, speed=hz, revolutions=300, rtol=3e-7, atol=1e-10, sample_rate=64 * hz)
         expected.append(_impact_period(ds.impact_time.values, hz, 200 / hz, 300 / hz))
     assert expected == [1, 0, 2]
     assert list(out["period"]) == expected

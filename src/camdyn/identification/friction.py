@@ -123,6 +123,8 @@ def _rebuild(coef: np.ndarray, orders: int, omega: float, grid: int):
 
 
 def _harmonic_check(name: str, x: np.ndarray, coef: np.ndarray, t: np.ndarray, speed: float) -> tuple[bool, str]:
+    """Whether the cam harmonics ``coef`` explain enough of the variance of the signal
+    ``x`` at times ``t`` [s] (speed [Hz]), and the check's detail."""
     fit = synthesize_harmonics(coef, speed, t)
     var = float(np.var(x))
     explained = 1.0 - float(np.var(x - fit)) / var if var > 0 else 0.0

@@ -24,26 +24,51 @@ File layouts
 CSV
     Comment lines ``# key = value`` (metadata, values may carry units, e.g.
     ``# speed = 16 Hz``, ``# cam.runout = 3.5 mm``), then a header row naming the
-    columns, then one row per sample; SI units, ``time`` in seconds.
-netCDF / HDF5 (``.nc``, ``.h5``, ``.hdf5``)
-    Variables over a ``time`` coordinate, each with a ``units`` attribute (converted to
-    the units above with pint).
+    columns, then one row per sample; SI units and ``time`` in seconds unless the header
+    (``time [ms]``, ``time_ms``) or a line ``# units: time ms, Nx N`` says otherwise.
+    Byte-order marks, semicolon or tab delimiters and Latin-1 comments are accepted
+    (:mod:`camdyn.io.csv_records`).
+netCDF / HDF5 (``.nc``, ``.h5``, ``.hdf5``, ``.nc4``)
+    Variables over a ``time`` dimension and coordinate, each with a ``units`` attribute
+    (converted to the units above with pint). Classic netCDF-3 files are read too.
 UFF 58 (``.uff``, ``.unv``)
     One dataset 58 per channel, named by ``id1``; the time axis from ``abscissa_min``
-    and ``abscissa_inc``; units from ``ordinate_axis_units_lab``; metadata as
-    ``key=value`` pairs separated by ``;`` in ``id4``.
+    and ``abscissa_inc`` (or the stored abscissa of an unevenly spaced dataset) in the
+    unit ``abscissa_axis_units_lab``; units from ``ordinate_axis_units_lab``; metadata
+    as ``key=value`` pairs separated by ``;`` in ``id4``.
+
+Refusals
+--------
+Every refusal is a :class:`~camdyn.errors.DataError` of one line that names the file and
+says what was found: an empty file; binary data, or a file whose first bytes show
+another format than its suffix (netCDF saved as ``.csv``: "it looks like a
+netCDF-4/HDF5 file; rename it to .nc"); a header without samples; a row that is not
+UTF-8 or not numbers (with its line number); an HDF5 file without netCDF dimensions; a
+truncated or damaged netCDF or UFF file; a time axis of unstated unit whose spacing
+suggests milliseconds or microseconds; and records with gaps, irregular sampling, or
+too few samples.
 """
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from camdyn.errors import DataError, UnitError
+from camdyn.errors import DataError
 from camdyn.io.atomic import atomic_output
-from camdyn.params.units import parse_quantity, parse_speed
+from camdyn.io.content import KIND_NAMES, file_kind, one_line, read_head
+from camdyn.io.csv_records import read_csv_record
+from camdyn.io.record_fields import (
+    check_time_unit,
+    finished_record,
+    metadata_item,
+    numeric_samples,
+    time_unit_factor,
+    unit_factor,
+)
 from camdyn.records.schema import (
     CHANNEL_UNITS,
     angular_acceleration,
@@ -51,150 +76,224 @@ from camdyn.records.schema import (
     make_record,
 )
 
-__all__ = ["CHANNEL_UNITS", "read_measurement", "write_measurement", "check_record", "make_record",
-           "angular_acceleration"]
-
-_PINT_UNITS = {"N": "N", "rad/s^2": "rad/s**2", "m/s^2": "m/s**2"}
-_METADATA = {"speed": "speed_hz", "speed_hz": "speed_hz", "cam.runout": "runout", "runout": "runout",
-             "preset": "preset", "noise": "noise"}
-
-
-def _metadata(key: str, value) -> tuple[str, object] | None:
-    key = key.strip()
-    if key not in _METADATA:
-        return None
-    name = _METADATA[key]
-    if name == "speed_hz":
-        return name, parse_speed(value)
-    if name == "runout":
-        return name, parse_quantity(value, "m", key)
-    if name == "noise":
-        return name, float(value)
-    return name, str(value).strip().strip('"')
-
-
-def _convert(name: str, values: np.ndarray, unit: str | None, where: str) -> np.ndarray:
-    target = CHANNEL_UNITS[name][0]
-    if unit is None or unit.strip() in ("", target):
-        if unit is None:
-            raise DataError(f"{where}: channel {name} has no units attribute (expected {target})")
-        return values
-    try:
-        factor = parse_quantity(f"1 {unit}", _PINT_UNITS[target], f"{where} {name}")
-    except UnitError as exc:
-        raise DataError(f"{where}: channel {name} has units {unit!r}, not convertible to {target} ({exc})") from None
-    return values * factor
-
-
-def _read_csv(path: Path) -> xr.Dataset:
-    meta = {}
-    header = None
-    skip = 0
-    with path.open() as fh:
-        for line in fh:
-            stripped = line.strip()
-            skip += 1
-            if not stripped:
-                continue
-            if stripped.startswith("#"):
-                body = stripped.lstrip("#").strip()
-                if "=" in body:
-                    k, v = body.split("=", 1)
-                    item = _metadata(k, v.strip())
-                    if item:
-                        meta[item[0]] = item[1]
-                continue
-            header = [c.strip() for c in stripped.split(",")]
-            break
-    if header is None:
-        raise DataError(f"{path}: no header row with column names")
-    if "time" not in header:
-        raise DataError(f"{path}: the header {header} has no 'time' column")
-    unknown = [c for c in header if c != "time" and c not in CHANNEL_UNITS]
-    if unknown:
-        raise DataError(f"{path}: unknown columns {unknown}; known: time, {', '.join(CHANNEL_UNITS)}")
-    try:
-        table = np.loadtxt(path, delimiter=",", skiprows=skip, ndmin=2)
-    except ValueError as exc:
-        raise DataError(f"{path}: cannot read the samples ({exc})") from None
-    if table.shape[1] != len(header):
-        raise DataError(f"{path}: {table.shape[1]} columns of numbers but {len(header)} names in the header")
-    cols = {name: table[:, i] for i, name in enumerate(header)}
-    return make_record(cols.pop("time"), cols, source=str(path), **meta)
-
-
-def _read_netcdf(path: Path) -> xr.Dataset:
-    try:
-        raw = xr.load_dataset(path, engine="h5netcdf")
-    except (OSError, ValueError) as exc:
-        raise DataError(f"{path}: not a readable netCDF/HDF5 file ({exc})") from None
-    if "time" not in raw.coords and "time" not in raw:
-        raise DataError(f"{path}: no 'time' coordinate")
-    time = raw["time"].values.astype(float)
-    unit = raw["time"].attrs.get("units", "s")
-    time = time * parse_quantity(f"1 {unit}", "s", "time")
-    cols = {name: _convert(name, raw[name].values.astype(float), raw[name].attrs.get("units"), str(path))
-            for name in CHANNEL_UNITS if name in raw}
-    meta = {}
-    for k, v in raw.attrs.items():
-        item = _metadata(k, v)
-        if item:
-            meta[item[0]] = item[1]
-    return make_record(time, cols, source=str(path), **meta)
-
-
-def _read_uff(path: Path) -> xr.Dataset:
-    import pyuff  # optional dependency (extra "measurements")
-
-    try:
-        sets = pyuff.UFF(str(path)).read_sets()
-    except Exception as exc:  # pyuff raises bare Exceptions on malformed files
-        raise DataError(f"{path}: not a readable UFF file ({exc})") from None
-    if isinstance(sets, dict):
-        sets = [sets]
-    time = None
-    cols = {}
-    meta = {}
-    for s in sets:
-        if s.get("type") != 58:
-            continue
-        name = str(s.get("id1", "")).strip()
-        if name not in CHANNEL_UNITS:
-            continue
-        data = np.asarray(s["data"], dtype=float)
-        t = float(s.get("abscissa_min", 0.0)) + float(s["abscissa_inc"]) * np.arange(data.size)
-        if time is None:
-            time = t
-        elif t.size != time.size or not np.allclose(t, time, rtol=0, atol=1e-9 * max(1.0, abs(time[-1]))):
-            raise DataError(f"{path}: channel {name} has a different time axis from the others")
-        cols[name] = _convert(name, data, str(s.get("ordinate_axis_units_lab", "")).strip() or None, str(path))
-        for pair in str(s.get("id4", "")).split(";"):
-            if "=" in pair:
-                item = _metadata(*pair.split("=", 1))
-                if item:
-                    meta[item[0]] = item[1]
-    if time is None:
-        raise DataError(f"{path}: no dataset 58 named {', '.join(CHANNEL_UNITS)} (in id1)")
-    return make_record(time, cols, source=str(path), **meta)
-
+__all__ = ["CHANNEL_UNITS", "RECORD_SUFFIXES", "read_measurement", "write_measurement", "check_record",
+           "make_record", "angular_acceleration"]
 
 #: File suffixes of the record formats (CSV, netCDF/HDF5, UFF 58).
 RECORD_SUFFIXES = {".csv", ".txt", ".nc", ".h5", ".hdf5", ".nc4", ".uff", ".unv"}
 
+_FORMATS = {".csv": "csv", ".txt": "csv", ".nc": "netcdf", ".h5": "netcdf", ".hdf5": "netcdf", ".nc4": "netcdf",
+            ".uff": "uff", ".unv": "uff"}
+_FORMAT_KINDS = {"csv": {"text"}, "netcdf": {"hdf5", "netcdf3"}, "uff": {"uff"}}
+_FORMAT_NAMES = {"csv": "CSV text", "netcdf": "a netCDF/HDF5 file", "uff": "a UFF file"}
+_RENAME = {"hdf5": "; rename it to .nc", "netcdf3": "; rename it to .nc", "uff": "; rename it to .uff",
+           "text": "; if it is a CSV record, rename it to .csv",
+           "zip": "; export the sheet as CSV (comma-separated, UTF-8)",
+           "xls": "; export the sheet as CSV (comma-separated, UTF-8)"}
+_CHANNELS = {name.lower(): name for name in CHANNEL_UNITS}
+_UNSTATED_UNITS = {"", "none", "unknown"}
+
+
+def _channel_factor(name: str, unit: str | None, where: str, field: str = "units attribute") -> float:
+    if unit is None:
+        raise DataError(f"{where}: channel {name} has no {field} (expected {CHANNEL_UNITS[name][0]})")
+    if unit.strip() == CHANNEL_UNITS[name][0]:
+        return 1.0
+    return unit_factor(unit, CHANNEL_UNITS[name][0], f"channel {name}", where)
+
+
+def _text(value: object) -> str:
+    if isinstance(value, bytes):
+        return value.decode("utf-8", errors="replace")
+    if isinstance(value, np.ndarray) and value.size == 1:
+        return str(value.item())
+    return str(value)
+
+
+def _load_netcdf(path: Path, kind: str) -> xr.Dataset:
+    options = {"engine": "scipy"} if kind == "netcdf3" else {"engine": "h5netcdf", "phony_dims": "access"}
+    try:
+        if kind == "hdf5":
+            # h5py first: a damaged root attribute makes h5netcdf fail half-built, and the
+            # half-built object prints a traceback when it is collected
+            import h5py
+
+            with h5py.File(path, "r") as handle:
+                handle.attrs.get("_nc3_strict")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return xr.load_dataset(path, decode_times=False, decode_timedelta=False, **options)
+    except Exception as exc:  # noqa: BLE001 - h5py, h5netcdf and scipy raise many types on damaged files
+        raise DataError(f"{path}: {KIND_NAMES[kind]} that cannot be read, probably truncated or damaged "
+                        f"({type(exc).__name__}: {one_line(exc, 160)}); write or copy it again") from None
+
+
+def _read_netcdf(path: Path, kind: str) -> xr.Dataset:
+    raw = _load_netcdf(path, kind)
+    if "time" not in raw.dims or "time" not in raw.variables:
+        found = ", ".join(f"{name}{raw[name].dims}" for name in raw.variables) or "none"
+        plain = not raw.dims or any(str(dim).startswith("phony_dim") for dim in raw.dims)
+        what = "an HDF5 file without netCDF dimensions/time coordinate" if plain else \
+            "a netCDF file without a 'time' dimension and coordinate"
+        raise DataError(f"{path}: {what} (its datasets: {found}); write it with xarray, "
+                        "Dataset.to_netcdf(path, engine='h5netcdf'), or with netCDF4 and a 'time' dimension and "
+                        "coordinate variable, or save it as CSV")
+    where = str(path)
+    metadata = {}
+    for key, value in raw.attrs.items():
+        item = metadata_item(key, value, where)
+        if item:
+            metadata[item[0]] = item[1]
+    if raw["time"].dims != ("time",):
+        raise DataError(f"{where}: the time coordinate has the dimensions {raw['time'].dims}, expected (time,)")
+    time = numeric_samples(raw["time"].values, "the time coordinate", where)
+    unit = raw["time"].attrs.get("units")
+    if unit is None or not _text(unit).strip():
+        check_time_unit(time, metadata.get("speed_hz"), where)
+    else:
+        time = time * time_unit_factor(_text(unit), where)
+    channels = {}
+    for variable in raw.data_vars:
+        name = _CHANNELS.get(str(variable).lower())
+        if name is None:
+            continue
+        if name in channels:
+            raise DataError(f"{where}: two variables name the channel {name} (letter case aside)")
+        if raw[variable].dims != ("time",):
+            raise DataError(f"{where}: channel {name} has the dimensions {raw[variable].dims}, expected (time,)")
+        unit = raw[variable].attrs.get("units")
+        values = numeric_samples(raw[variable].values, f"channel {name}", where)
+        channels[name] = values * _channel_factor(name, None if unit is None else _text(unit), where)
+    return finished_record(path, time, channels, metadata)
+
+
+def _uff_delimiters(raw: bytes) -> list[int]:
+    """Offsets of the ``    -1`` lines that delimit UFF datasets (as pyuff finds them)."""
+    found, at = [], raw.find(b"    -1")
+    while at != -1:
+        end = at + 6
+        if end == len(raw) or raw[end] in (10, 13) or raw[end:at + 80] == b" " * 74:
+            found.append(at)
+        at = raw.find(b"    -1", at + 1)
+    return found
+
+
+def _uff_sets(path: Path, raw: bytes) -> list[dict]:
+    delimiters = _uff_delimiters(raw)
+    if not delimiters:
+        raise DataError(f"{path}: not a UFF file: no dataset delimiter lines ('    -1', four blanks then -1)")
+    if len(delimiters) % 2:
+        start, end = raw[:delimiters[-1]].count(b"\n") + 1, raw.count(b"\n") + 1
+        raise DataError(f"{path}: a truncated UFF file: the dataset that starts on line {start} has no closing "
+                        f"'    -1' line before the file ends (line {end}); export or copy it again")
+    import pyuff  # optional dependency (extra "measurements")
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            sets = pyuff.UFF(str(path)).read_sets()
+    except Exception as exc:  # noqa: BLE001 - pyuff raises bare Exceptions on malformed files
+        raise DataError(f"{path}: a damaged UFF file ({one_line(exc, 160)})") from None
+    return [sets] if isinstance(sets, dict) else list(sets)
+
+
+def _uff_number(dataset: dict, key: str, where: str) -> float:
+    try:
+        return float(dataset[key])
+    except (KeyError, TypeError, ValueError):
+        raise DataError(f"{where}: the header field {key} is missing or not a number") from None
+
+
+def _read_uff(path: Path, raw: bytes) -> xr.Dataset:
+    time, time_stated, channels, metadata = None, True, {}, {}
+    for number, dataset in enumerate(_uff_sets(path, raw), start=1):
+        name = _CHANNELS.get(str(dataset.get("id1", "")).strip().lower())
+        if dataset.get("type") != 58 or name is None:
+            continue
+        where = f"{path}: dataset {number} ({name})"
+        if name in channels:
+            raise DataError(f"{where}: a second dataset named {name}")
+        data = numeric_samples(dataset.get("data"), "the data", where)
+        announced = _uff_number(dataset, "num_pts", where)
+        if announced != data.size:
+            raise DataError(f"{where}: announces {announced:.0f} values but holds {data.size}; the file is "
+                            "truncated or damaged")
+        stamps = numeric_samples(dataset.get("x"), "the abscissa", where)
+        if stamps.size != data.size:
+            raise DataError(f"{where}: {stamps.size} abscissa values for {data.size} samples")
+        unit = _text(dataset.get("abscissa_axis_units_lab", "")).strip()
+        if unit.lower() not in _UNSTATED_UNITS:
+            stamps = stamps * time_unit_factor(unit, where)
+        if time is None:
+            time, time_stated = stamps, unit.lower() not in _UNSTATED_UNITS
+        elif stamps.size != time.size or not np.allclose(
+                stamps, time, rtol=0, atol=1e-9 * max(1.0, float(np.max(np.abs(time), initial=0.0)))):
+            raise DataError(f"{where}: a different time axis from the other channels")
+        unit = _text(dataset.get("ordinate_axis_units_lab", "")).strip()
+        unit = None if unit.lower() in _UNSTATED_UNITS else unit
+        channels[name] = data * _channel_factor(name, unit, where, "ordinate unit label")
+        for pair in _text(dataset.get("id4", "")).split(";"):
+            if "=" in pair:
+                item = metadata_item(*pair.split("=", 1), where)
+                if item:
+                    metadata[item[0]] = item[1]
+    if time is None:
+        raise DataError(f"{path}: no dataset 58 named {', '.join(CHANNEL_UNITS)} (in id1)")
+    if not time_stated:
+        check_time_unit(time, metadata.get("speed_hz"), str(path))
+    return finished_record(path, time, channels, metadata)
+
+
+def _format_mismatch(path: Path, family: str, kind: str) -> DataError:
+    looks = f"it looks like {KIND_NAMES[kind]}{_RENAME.get(kind, '')}"
+    if family == "csv" and kind == "binary":
+        return DataError(f"{path}: binary file, not CSV text")
+    if family == "csv" and kind != "uff":
+        return DataError(f"{path}: binary file, not CSV text: {looks}")
+    return DataError(f"{path}: not {_FORMAT_NAMES[family]}: {looks}")
+
 
 def read_measurement(path: str | Path) -> xr.Dataset:
-    """Read a record from CSV, netCDF/HDF5 or UFF 58, by the file's suffix."""
+    """Read a record from CSV, netCDF/HDF5 or UFF 58, by the file's suffix.
+
+    The file's first bytes are checked against its suffix first: an empty file, binary
+    data named ``.csv``, or a file in another format than its suffix says is refused with
+    a message that says what the file looks like. The CSV reader's tolerances (byte-order
+    marks, delimiters, units in the header) are listed in :mod:`camdyn.io.csv_records`.
+
+    Raises
+    ------
+    DataError
+        The file is missing, unreadable, in the wrong format, or its samples are unusable.
+    """
     path = Path(path)
+    if path.is_dir():
+        raise DataError(f"{path} is a folder, not a measurement file")
     if not path.is_file():
         raise DataError(f"no such file: {path}")
+    try:
+        head = read_head(path)
+    except OSError as exc:
+        raise DataError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
+    kind = file_kind(head)
     suffix = path.suffix.lower()
-    if suffix in (".csv", ".txt"):
-        return _read_csv(path)
-    if suffix in (".nc", ".h5", ".hdf5", ".nc4"):
-        return _read_netcdf(path)
-    if suffix in (".uff", ".unv"):
-        return _read_uff(path)
-    raise DataError(f"{path}: unknown measurement format {suffix!r} (use .csv, .nc/.h5 or .uff/.unv)")
+    family = _FORMATS.get(suffix)
+    if kind == "empty":
+        raise DataError(f"{path}: the file is empty (0 bytes); was the export or the copy interrupted?")
+    if family is None:
+        raise DataError(f"{path}: unknown measurement format {suffix or '(no suffix)'!r} (use .csv, .nc/.h5 or "
+                        f".uff/.unv); its content looks like {KIND_NAMES[kind]}{_RENAME.get(kind, '')}")
+    if kind not in _FORMAT_KINDS[family]:
+        raise _format_mismatch(path, family, kind)
+    if family == "netcdf":
+        return _read_netcdf(path, kind)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise DataError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
+    if family == "csv":
+        return read_csv_record(path, raw)
+    return _read_uff(path, raw)
 
 
 def _meta_pairs(ds: xr.Dataset) -> list[tuple[str, str]]:

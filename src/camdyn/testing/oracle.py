@@ -248,8 +248,11 @@ def reference_equilibrium(system: System, theta0: float) -> dict:
     elif fr.law == "tanh":
         mu = fr.coefficient * math.tanh(fr.smoothing * vr)
 
-    def moment(a):
+    def moment(a, penetration=None):
+        """Clockwise moment [N m] at ``a`` [rad]; ``penetration(a)`` [m] overrides the geometry's."""
         delta, _, chi, rho, _, _, n, u = model.geometry_at(theta0, 0.0, a, 0.0)
+        if penetration is not None:
+            delta = penetration(a)
         fs, m = model.spring(a)
         r_g = system.follower.cg_distance * u
         m += _z_moment(r_g[0], r_g[1], 0.0, -system.follower.mass * system.gravity)
@@ -266,13 +269,42 @@ def reference_equilibrium(system: System, theta0: float) -> dict:
         lo -= 2.0 * (a_touch - lo)
     alpha = brentq(moment, lo, a_touch, xtol=1e-17, rtol=1e-15)
     delta, _, chi, *_ = model.geometry_at(theta0, 0.0, alpha, 0.0)
-    # a step of 1e-5 of the penetration: truncation error h^2 f3 / (6 f1) ~ 4e-12 relative for
-    # the Hertz delta^1.5, rounding ~1e-10 relative
-    step = 1e-5 * delta / chi
-    k = -(moment(alpha + step) - moment(alpha - step)) / (2.0 * step)
+    # The penetration is a difference of lengths ~1e5 times larger, so its rounding
+    # (~3e-17 m) would swamp a difference quotient over steps small enough for the Hertz
+    # law. Its first-order change is exact instead: d delta / d alpha = -u . Xc = -chi (the
+    # contact point minimises n . X, so only n turns, and dn/dalpha = u); the rest of the
+    # moment (arm, curvature, spring, gravity) varies on a scale of radians. Central
+    # difference over 1e-4 of the penetration: truncation ~4e-10 relative.
+    # (The quotient divides by the steps as rounded: alpha ~ 0.1 rad holds a 1e-9 rad step
+    # to only 1e-7.)
+    step = 1e-4 * delta / chi
+    linear = lambda a: delta - chi * (a - alpha)
+    up, down = alpha + step, alpha - step
+    k = -(moment(up, linear) - moment(down, linear)) / (up - down)
     omega = math.sqrt(k / system.follower.inertia)
     c = 2.0 * system.contact.damping_ratio * omega * system.follower.inertia / chi ** 2
     return {"angle": alpha, "moment_arm": chi, "penetration": delta, "omega_n": omega, "viscous_c": c}
+
+
+def _events(model, t, contact, slip, coulomb):
+    """Terminal events of a segment starting at ``t`` [s]: the penetration leaving its sign,
+    and under Coulomb friction in contact the sliding velocity leaving ``slip``."""
+    t_quiet = t + 1e-12 * max(1.0, t)  # no event at the very start of a segment
+
+    def on_delta(tt, yy):
+        if tt <= t_quiet:
+            return 1.0 if contact else -1.0
+        return model.geometry(tt, yy[0], yy[1])[0]
+    on_delta.terminal = True
+    on_delta.direction = -1 if contact else 1
+
+    def on_vr(tt, yy):
+        if tt <= t_quiet:
+            return slip
+        return model.geometry(tt, yy[0], yy[1])[4]
+    on_vr.terminal = True
+    on_vr.direction = -slip
+    return [on_delta, on_vr] if coulomb else [on_delta]
 
 
 def _sample_forces(model, t_eval, out, mask, mode, fn_out, ff_out):
@@ -333,25 +365,7 @@ def reference_simulate(system: System, theta0: float, y0, t_end: float, t_eval, 
     while t < t_end:
         if len(log) > 100_000:
             raise RuntimeError("reference model: too many event segments (sticking?)")
-        t_quiet = t + 1e-12 * max(1.0, t)  # no event at the very start of a segment
-
-        def on_delta(tt, yy, t_quiet=t_quiet, contact=contact):
-            if tt <= t_quiet:
-                return 1.0 if contact else -1.0
-            return model.geometry(tt, yy[0], yy[1])[0]
-        on_delta.terminal = True
-        on_delta.direction = -1 if contact else 1
-
-        def on_vr(tt, yy, t_quiet=t_quiet, slip=slip):
-            if tt <= t_quiet:
-                return slip
-            return model.geometry(tt, yy[0], yy[1])[4]
-        on_vr.terminal = True
-        on_vr.direction = -slip
-
-        evs = [on_delta]
-        if contact and system.friction.law == "coulomb":
-            evs.append(on_vr)
+        evs = _events(model, t, contact, slip, contact and system.friction.law == "coulomb")
         mode = (contact, slip, approach)
         sol = solve_ivp(lambda tt, yy: model.derivative(tt, yy, *mode), (t, t_end), y,
                         method=method, rtol=rtol, atol=atol, events=evs, dense_output=True,
