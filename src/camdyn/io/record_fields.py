@@ -48,7 +48,9 @@ def metadata_item(key: str, value: object, where: str) -> tuple[str, object] | N
     if isinstance(value, bytes):
         value = value.decode("utf-8", errors="replace")
     if isinstance(value, np.ndarray):
-        value = value.item() if value.size == 1 else " ".join(str(v) for v in value.ravel())
+        if value.size != 1:
+            raise DataError(f"{where}: the metadata entry {key} holds {value.size} values; expected one")
+        value = value.item()
     if isinstance(value, np.generic):
         value = value.item()
     if name != "preset" and isinstance(value, str) and re.search(r"\d,\d", value):

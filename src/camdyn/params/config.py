@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import difflib
 import json
+import math
 import tomllib
 from importlib import resources
 from pathlib import Path
@@ -100,10 +101,12 @@ def convert_value(key: str, raw, values: dict) -> object:
             return raw.strip().lower() in ("true", "yes", "1")
         raise ParameterError(f"{key}: expected true or false, got {raw!r}")
     if unit == "int":
+        if isinstance(raw, bool) or (isinstance(raw, float) and not raw.is_integer()):
+            raise ParameterError(f"{key}: expected a whole number, got {raw!r}")
         try:
             return int(raw)
-        except (TypeError, ValueError):
-            raise ParameterError(f"{key}: expected an integer, got {raw!r}") from None
+        except (TypeError, ValueError, OverflowError):
+            raise ParameterError(f"{key}: expected a whole number, got {raw!r}") from None
     if unit == "speed":
         return parse_speed(raw, key)
     if unit == "law":
@@ -111,6 +114,8 @@ def convert_value(key: str, raw, values: dict) -> object:
         exponent = values.get("contact.exponent", _BY_KEY["contact.exponent"].default)
         if isinstance(exponent, str):
             exponent = parse_quantity(exponent, "", "contact.exponent")
+        if not (isinstance(exponent, (int, float)) and math.isfinite(exponent)):
+            raise ParameterError(f"contact.exponent must be a finite number, got {exponent!r}")
         return parse_quantity(raw, law.unit_of_beta(float(exponent)), key)
     if isinstance(raw, str):
         return parse_quantity(raw, unit, key)
@@ -182,7 +187,13 @@ def read_table(source: str | Path) -> tuple[dict, str, str]:
     elif path.suffix == ".toml" or path.exists():
         if not path.is_file():
             raise PresetError(f"configuration file {str(source)!r} does not exist")
-        text, name = path.read_text(), path.stem
+        try:
+            text, name = path.read_text(encoding="utf-8"), path.stem
+        except UnicodeDecodeError as exc:
+            raise PresetError(f"{source}: not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
+                              f"{exc.start}); a configuration file is TOML, saved as UTF-8") from None
+        except OSError as exc:
+            raise PresetError(f"{source}: cannot be read ({exc.strerror or exc})") from None
     else:
         preset_text(str(source))  # raises a PresetError with suggestions
         raise AssertionError("unreachable")

@@ -13,12 +13,13 @@ damping laws are the rows of :mod:`camdyn.params.laws`.
 
 from __future__ import annotations
 
+import difflib
 import math
 from dataclasses import dataclass, fields, replace
 
-from camdyn.errors import GeometryError, ParameterError
+from camdyn.errors import GeometryError, ParameterError, UnknownKeyError
 from camdyn.params.laws import DAMPING_ALIASES, DAMPING_LAWS, RESTITUTION_LAWS, DampingLaw, lookup
-from camdyn.params.schema import group, parameter
+from camdyn.params.schema import group, parameter, parameter_index
 
 # DAMPING_LAWS, DAMPING_ALIASES and RESTITUTION_LAWS are views of the damping-law table
 # (camdyn.params.laws.TABLE), also offered here beside the other name tables.
@@ -37,8 +38,23 @@ CONTACT_KINDS = {"point": 0, "line": 1}
 
 
 def _check_finite(owner: str, obj) -> None:
+    """Refuse values of the wrong type (text where a number is due) and non-finite numbers."""
     for f in fields(obj):
         v = getattr(obj, f.name)
+        unit = f.metadata.get("unit")
+        if unit == "str":
+            if not isinstance(v, str):
+                raise ParameterError(f"{owner}.{f.name} must be text, got {v!r}")
+            continue
+        if unit == "bool":
+            if not isinstance(v, bool):
+                raise ParameterError(f"{owner}.{f.name} must be true or false, got {v!r}")
+            continue
+        if v is None and f.default is None:
+            continue
+        if unit is not None and (isinstance(v, bool) or not isinstance(v, (int, float))):
+            raise ParameterError(f"{owner}.{f.name} must be a number in SI units ({unit}), got {v!r}; text with "
+                                 f"units is read by camdyn.load_system(source, {{'{owner}.{f.name}': ...}})")
         if isinstance(v, float) and not math.isfinite(v):
             raise ParameterError(f"{owner}.{f.name} must be a finite number, got {v}")
 
@@ -406,6 +422,12 @@ class System:
         ``cam.radius`` sets both semi-axes."""
         groups: dict[str, dict] = {}
         top: dict = {}
+        known = parameter_index(System)
+        for key in dotted:
+            if key not in known and key != "cam.radius":
+                close = difflib.get_close_matches(key, [*known, "cam.radius"], n=3)
+                hint = f"; did you mean {', '.join(close)}?" if close else ""
+                raise UnknownKeyError(f"unknown parameter {key!r}{hint}")
         for key, value in dotted.items():
             if key == "cam.radius":                   # a circle: both semi-axes
                 groups.setdefault("cam", {}).update(semi_major=value, semi_minor=value)

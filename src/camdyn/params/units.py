@@ -10,6 +10,7 @@ per second, rpm means revolutions per minute, rad/s means radians per second.
 from __future__ import annotations
 
 import math
+import re
 from functools import lru_cache
 
 import pint
@@ -28,6 +29,18 @@ def registry() -> pint.UnitRegistry:
         return pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
 
 
+#: ``3,5 mm``: a decimal comma, which pint would read as 35 mm.
+_DECIMAL_COMMA = re.compile(r"\d,\d")
+#: ``3 4 mm``: two numbers side by side, which pint would multiply.
+_NUMBERS_SIDE_BY_SIDE = re.compile(r"^[-+]?[\d.]+(?:[eE][-+]?\d+)?\s+[-+]?[\d.]+(?:[eE][-+]?\d+)?(?=\s|$|[a-zA-Z])")
+
+
+def _math_finite_text(text: str) -> bool:
+    """False for text that reads as nan or inf (with or without a unit)."""
+    head = text.split()[0].lower() if text.split() else ""
+    return head.lstrip("+-") not in ("nan", "inf", "infinity")
+
+
 def _quantity(text, key: str):
     reg = registry()
     if isinstance(text, bool):
@@ -37,6 +50,12 @@ def _quantity(text, key: str):
     if not isinstance(text, str) or not text.strip():
         raise UnitError(f"{key}: expected a quantity such as '17.5 mm', got {text!r}")
     cleaned = text.strip().replace("·", "*").replace("^", "**").replace("µ", "u")
+    if _DECIMAL_COMMA.search(cleaned):
+        raise UnitError(f"{key}: {text!r} has a comma in its number; write the decimal point as '.'")
+    if _NUMBERS_SIDE_BY_SIDE.match(cleaned):
+        raise UnitError(f"{key}: {text!r} holds two numbers side by side; write one number and its unit")
+    if not _math_finite_text(cleaned):
+        raise UnitError(f"{key}: {text!r} is not a finite number")
     try:
         q = reg.Quantity(cleaned)
     except Exception as exc:  # pint raises several unrelated types here
