@@ -153,9 +153,11 @@ def run_variant(mutant: Mutant | None, keep: bool) -> dict:
         suite = ET.parse(report).getroot()
         suite = suite if suite.tag == "testsuite" else suite.find("testsuite")
         counts = {k: int(suite.get(k, 0)) for k in ("tests", "failures", "errors", "skipped")}
+        failed = [case.get("name") for case in suite.iter("testcase")
+                  if case.find("failure") is not None or case.find("error") is not None]
         if counts["tests"] == 0:
             raise SetupError(f"{name}: no tests ran\n{out[-3000:]}")
-        row = {"name": name, "mutant": mutant is not None, "rc": proc.returncode, **counts,
+        row = {"name": name, "mutant": mutant is not None, "rc": proc.returncode, **counts, "failed": failed,
                "seconds": time.perf_counter() - start, "tail": out[-2000:], "camdyn": imported[0]}
         print(f"  {verdict(row):8s} {row['seconds']:4.0f} s  {name}", flush=True)
         return row
@@ -189,10 +191,12 @@ def main(argv=None) -> int:
     with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         rows = list(pool.map(lambda m: run_variant(m, args.keep), variants))
     width = max(len(r["name"]) for r in rows)
-    print(f"\n{'mutant':<{width}}  {'tests failed':>12}  {'time':>6}  verdict")
+    print(f"\n{'mutant':<{width}}  {'tests failed':>12}  {'time':>6}  verdict   first failures")
     for r in rows:
         failed = f"{r['failures'] + r['errors']}/{r['tests']}"
-        print(f"{r['name']:<{width}}  {failed:>12}  {r['seconds']:5.0f}s  {verdict(r)}")
+        bases = dict.fromkeys(name.split("[")[0].removeprefix("test_")[:40] for name in r["failed"])
+        first = ", ".join(list(bases)[:2])
+        print(f"{r['name']:<{width}}  {failed:>12}  {r['seconds']:5.0f}s  {verdict(r):8s}  {first}")
     print(f"\nimported camdyn from the copies (e.g. {rows[0]['camdyn']}); "
           f"total {time.perf_counter() - start:.0f} s, {args.jobs} job(s)")
     broken = [r for r in rows if verdict(r) in ("SURVIVED", "FAIL")]

@@ -39,7 +39,7 @@ __all__ = ["LyapunovResult", "lyapunov_exponent"]
 def _advance(p, y, t0, t1, rtol, atol, h_max):
     t_out = np.array([t1])
     out, modes, events, counters = driver.integrate(systems.CAM_FOLLOWER, p, y, t0, t1, t_out, rtol, atol, h_max,
-                                                    driver.METHOD_AUTO, 10 ** 8, 16)
+                                                    driver.METHOD_AUTO, 10 ** 8, 16, True)
     return out[0].copy(), counters[driver.COUNT_STATUS]
 
 
@@ -142,6 +142,8 @@ def lyapunov_exponent(system: System, speed: float | None = None, revolutions: i
     prep = prepare(system)
     omega = 2.0 * math.pi / period
     logs, status = _benettin(prep.p, prep.y0, period, omega, transient, revolutions, separation, rtol, atol)
+    if status == driver.STATUS_INTERRUPTED:
+        raise KeyboardInterrupt
     if status != 0:
         raise SimulationError(f"Lyapunov exponent at {system.motion.speed:g} Hz: "
                               f"{driver.STATUS_MESSAGES[int(status)]}")

@@ -25,7 +25,7 @@ except ImportError:  # pragma: no cover
 
 #: The interrupt of the current command: its signal and, for a sweep, the exception that
 #: says how to resume (typer turns KeyboardInterrupt into exit status 130 and drops it).
-_interrupt = {"signal": signal.SIGINT, "exception": None}
+_interrupt = {"signal": signal.SIGINT, "exception": None, "arrived": False}
 
 
 def _interruptible(command):
@@ -68,10 +68,20 @@ app.command("map")(_interruptible(analysis.regime_map_command))
 app.command("spectrum")(_interruptible(analysis.spectrum))
 
 
-def _on_terminate(signum, frame):
-    """SIGTERM: stop as Ctrl-C does (workers stopped, checkpoints kept), exit status 143."""
-    _interrupt["signal"] = signal.SIGTERM
+def _on_signal(signum, frame):
+    """SIGINT and SIGTERM: remember which arrived and stop as Ctrl-C does (workers stopped,
+    checkpoints kept); the exit status is 128 + the signal's number (130, 143). An
+    interrupt that lands inside a library's callback (numba compiling on first use) comes
+    out as that library's own error; the flag set here still marks it as an interrupt."""
+    _interrupt["signal"] = signal.Signals(signum)
+    _interrupt["arrived"] = True
     raise KeyboardInterrupt
+
+
+def _quiet_unraisable(unraisable) -> None:
+    """Drop the 'Exception ignored' report of an interrupt inside a C callback."""
+    if not isinstance(unraisable.exc_value, KeyboardInterrupt):
+        sys.__unraisablehook__(unraisable)
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
@@ -94,12 +104,16 @@ def main(argv=None) -> int:
     error); 130 interrupted by Ctrl-C (143 by SIGTERM). Set ``CAMDYN_DEBUG=1`` to see the
     traceback of an unexpected error.
     """
-    _interrupt.update(signal=signal.SIGINT, exception=None)
+    _interrupt.update(signal=signal.SIGINT, exception=None, arrived=False)
     warnings.showwarning = _show_warning
+    sys.unraisablehook = _quiet_unraisable
+    previous = {}
     try:
-        previous = signal.signal(signal.SIGTERM, _on_terminate)
-    except ValueError:   # not the main thread: leave SIGTERM alone
-        previous = None
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            if signal.getsignal(sig) is not signal.SIG_IGN:
+                previous[sig] = signal.signal(sig, _on_signal)
+    except ValueError:   # not the main thread: leave the signals alone
+        pass
     try:
         result = app(args=argv, standalone_mode=False, prog_name="camdyn")
     except typer.Abort as exc:
@@ -119,14 +133,16 @@ def main(argv=None) -> int:
         print(f"error: {exc.strerror or exc}{f' ({exc.filename})' if exc.filename else ''}", file=sys.stderr)
         return 1
     except Exception as exc:  # noqa: BLE001 - the promise is one line, never a traceback
+        if _interrupt["arrived"]:
+            return _interrupted(None)
         if os.environ.get("CAMDYN_DEBUG"):
             raise
         print(f"error: unexpected {type(exc).__name__}: {exc} (set CAMDYN_DEBUG=1 for the traceback)",
               file=sys.stderr)
         return 1
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
     if result == 130:   # typer's exit status for KeyboardInterrupt
         return _interrupted(None)
     return result if isinstance(result, int) else 0

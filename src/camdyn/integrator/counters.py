@@ -26,6 +26,7 @@ STATUS_MAX_STEPS = 1
 STATUS_STEP_UNDERFLOW = 2
 STATUS_NOT_FINITE = 3
 STATUS_ZENO = 4
+STATUS_INTERRUPTED = 5
 STATUS_MESSAGES = {
     STATUS_OK: "completed",
     STATUS_MAX_STEPS: "stopped: the maximum number of steps was reached",
@@ -33,4 +34,5 @@ STATUS_MESSAGES = {
     STATUS_NOT_FINITE: "stopped: the state became infinite or NaN",
     STATUS_ZENO: "stopped: events accumulated at one instant (sticking or chattering contact); "
                  "try tanh friction or another damping law",
+    STATUS_INTERRUPTED: "interrupted (Ctrl-C)",
 }

@@ -43,6 +43,7 @@ from camdyn.integrator.counters import (
     COUNT_SIZE,
     COUNT_STATUS,
     COUNTER_NAMES,
+    STATUS_INTERRUPTED,
     STATUS_MAX_STEPS,
     STATUS_MESSAGES,
     STATUS_NOT_FINITE,
@@ -52,6 +53,7 @@ from camdyn.integrator.counters import (
 )
 from camdyn.integrator.crossings import earliest_crossing, ensure_extension, midpoint_guards
 from camdyn.integrator.inlining import InlinedPipeline
+from camdyn.integrator.interrupt import POLL_STEPS, interrupted
 from camdyn.integrator.steppers import (
     KIND_DOP853,
     KIND_DP5,
@@ -69,7 +71,7 @@ __all__ = [
     "integrate", "COUNT_ACCEPTED", "COUNT_REJECTED", "COUNT_RHS", "COUNT_JACOBIANS", "COUNT_EXPLICIT",
     "COUNT_ROSENBROCK", "COUNT_EVENTS", "COUNT_ROOT_ITERATIONS", "COUNT_STATUS", "COUNT_EVENTS_DROPPED",
     "COUNT_SIZE", "COUNTER_NAMES", "STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW",
-    "STATUS_NOT_FINITE", "STATUS_ZENO", "STATUS_MESSAGES", "METHOD_AUTO", "METHOD_EXPLICIT",
+    "STATUS_NOT_FINITE", "STATUS_ZENO", "STATUS_INTERRUPTED", "STATUS_MESSAGES", "METHOD_AUTO", "METHOD_EXPLICIT",
     "METHOD_ROSENBROCK", "METHOD_DOP853", "EVENT_COLUMNS", "N_EVENT_COLUMNS", "MODE_SIZE",
 ]
 
@@ -355,7 +357,7 @@ def _advance(system, t, h, t_stop, e, order, y, f, y1, f1, dwork, kind, mode, p,
 
 @numba.njit(cache=True, pipeline_class=InlinedPipeline)
 def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, method, max_steps,
-              max_events):
+              max_events, interruptible=False):
     """Integrate a registered hybrid system from ``t_start`` to ``t_end``.
 
     Parameters
@@ -379,6 +381,10 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
         5(4), 2 RODAS4, 3 DOP853.
     max_steps, max_events : int
         Limits on accepted steps and on logged events.
+    interruptible : bool
+        Poll for Ctrl-C every :data:`~camdyn.integrator.interrupt.POLL_STEPS` steps and
+        stop with ``STATUS_INTERRUPTED`` (the caller raises ``KeyboardInterrupt``). Only
+        for calls that hold the GIL: not from ``nogil`` or ``parallel`` kernels.
 
     Returns
     -------
@@ -409,6 +415,10 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
         h, last, stop = _next_step(t, h, h_max, t_end, max_steps, counters)
         if stop:
             break
+        if interruptible and (counters[COUNT_ACCEPTED] + counters[COUNT_REJECTED]) % POLL_STEPS == 0:
+            if interrupted():
+                counters[COUNT_STATUS] = STATUS_INTERRUPTED
+                break
         kind, order, e = _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, k16, ytmp, y1,
                                      f1, err, err3, counters)
         dwork = f7 if kind == KIND_DOP853 else work

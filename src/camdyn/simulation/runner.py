@@ -179,9 +179,11 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
     start = _time.perf_counter()
     y, modes, events, counters = driver.integrate(
         systems.CAM_FOLLOWER, prep.p, y0, 0.0, float(duration), t_out, float(rtol), float(atol),
-        float(max_step), METHODS[method], int(max_steps), max_events)
+        float(max_step), METHODS[method], int(max_steps), max_events, True)
     elapsed = _time.perf_counter() - start
     status = int(counters[driver.COUNT_STATUS])
+    if status == driver.STATUS_INTERRUPTED:
+        raise KeyboardInterrupt
     if status != driver.STATUS_OK:
         t_fail = t_out[np.isnan(y[:, 0])][0] if np.isnan(y[:, 0]).any() else duration
         raise SimulationError(f"simulation {driver.STATUS_MESSAGES[status]} near t = {t_fail:.6g} s")
