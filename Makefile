@@ -19,7 +19,7 @@ demo: $(BIN)/.installed
 	$(BIN)/camdyn demo --out out
 
 test: $(BIN)/.installed
-	$(BIN)/ruff check src tests benchmarks examples
+	$(BIN)/ruff check src tests tools benchmarks examples
 	$(BIN)/lint-imports
 	$(BIN)/python -m pytest -q
 

@@ -3,7 +3,7 @@
 The simulated channels (alpha, alpha_dot, alpha_ddot, Fn, Ff, Fs) are fed to an independent
 rigid-body calculation: 3-D vectors and cross products, the angular velocity
 ``omega = -alpha_dot z`` of a clockwise angle, the centre of gravity at ``l_cg u``, every
-force applied at its own point (docs/model.md §1, §3). The runs are chosen so that the
+force applied at its own point (docs/model.md §1, §3.1, §3.7, §3.8). The runs are chosen so that the
 inertia force, its centripetal part and the friction force are each many orders of
 magnitude above the tolerance: dropping any of them, or flipping a sign, fails.
 

@@ -188,6 +188,9 @@ def synthesize_impulse_test(masses=(0.21, 0.05), stiffnesses=(8.0e6, 6.0e6), dam
     w2, phi = eigh(stiff, mass)                     # mass-normalised: phi^T M phi = I
     omega = np.sqrt(w2)
     zeta = np.asarray(damping_ratios, float)
+    if zeta.shape != (2,) or not np.all((zeta >= 0.0) & (zeta < 1.0)):
+        raise ParameterError(f"modal damping ratios must lie in [0, 1) (0 undamped, 1 critically damped, where "
+                             f"no resonance peak is left to measure), got {damping_ratios!r}")
     damp = mass @ phi @ np.diag(2 * zeta * omega) @ phi.T @ mass
     minv = np.linalg.inv(mass)
     a_mat = np.block([[np.zeros((2, 2)), np.eye(2)], [-minv @ stiff, -minv @ damp]])

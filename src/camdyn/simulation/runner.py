@@ -8,7 +8,7 @@ import time as _time
 import numpy as np
 import xarray as xr
 
-from camdyn.errors import ParameterError, SimulationError
+from camdyn.errors import GeometryError, ParameterError, SimulationError
 from camdyn.integrator import driver
 from camdyn.model import layout as L
 from camdyn.model.equilibrium import (
@@ -40,11 +40,28 @@ class Prepared:
             theta0 = zero_state(system)[1]
         self.theta0 = theta0
         self.equilibrium: Equilibrium = static_equilibrium(system, theta0)
+        _check_contact_on_follower(system, self.equilibrium)
         self.viscous_c = viscous_coefficient(system, self.equilibrium) if self.equilibrium.in_contact else 0.0
         if system.contact.law.needs_damping_ratio and not self.equilibrium.in_contact:
             self.viscous_c = viscous_coefficient(system)  # raises a clear error
         self.p = L.pack(system, viscous_c=self.viscous_c, initial_angle=theta0)
         self.y0 = np.array([self.equilibrium.angle, 0.0, 0.0])
+
+
+def _check_contact_on_follower(system: System, eq: Equilibrium) -> None:
+    """Refuse a geometry whose contact leaves the follower: over a revolution the contact
+    point moves along the bar by at most the runout plus the difference of the semi-axes
+    [m] from where it sits at equilibrium (``chi*``)."""
+    if not eq.in_contact:
+        return
+    cam, length = system.cam, system.follower.length
+    reach = cam.runout + (cam.semi_major - cam.semi_minor)
+    near, far = eq.moment_arm - reach, eq.moment_arm + reach
+    if near <= 0.0 or far >= length:
+        raise GeometryError(
+            f"the cam touches the follower between {near * 1e3:.3g} and {far * 1e3:.3g} mm from the pivot over a "
+            f"revolution, but the bar runs from 0 to {length * 1e3:.3g} mm (follower.length): move the cam "
+            f"(cam.pivot_x) or lengthen the bar")
 
 
 def prepare(system: System) -> Prepared:

@@ -32,6 +32,7 @@ import concurrent.futures as cf
 import contextlib
 import multiprocessing
 import os
+import re
 
 import numpy as np
 import xarray as xr
@@ -52,7 +53,7 @@ from camdyn.sweeps import worker
 from camdyn.sweeps.spec import SweepSpec
 from camdyn.sweeps.store import Checkpoint
 
-__all__ = ["compute_chunk", "prepare_chunk", "run_sweep", "default_workers", "QUIET_DASK"]
+__all__ = ["check_dask_address", "compute_chunk", "prepare_chunk", "run_sweep", "default_workers", "QUIET_DASK"]
 
 STATUS_OK, STATUS_REFUSED, STATUS_SOLVER = 0, 1, 2
 MAX_STEPS_PER_REVOLUTION = 200_000
@@ -182,6 +183,16 @@ def _executor(workers: int, dask: str | None, threads: int, point):
         yield client.get_executor(), max(n, 1), f"Dask at {client.scheduler.address} ({n} workers)"
 
 
+def check_dask_address(dask: str | None) -> None:
+    """Refuse a ``dask`` setting that is neither ``"local"`` nor a scheduler address
+    ``PROTOCOL://HOST:PORT`` (tcp, tls, ucx, ws, wss or inproc)."""
+    if dask is None or dask == "local":
+        return
+    if not (isinstance(dask, str) and re.fullmatch(r"(tcp|tls|ucx|ws|wss)://[\w.\-\[\]:]+:\d+|inproc://\S+", dask)):
+        raise ParameterError(f"--dask must be 'local' or a scheduler address such as tcp://10.0.0.5:8786, "
+                             f"got {dask!r}")
+
+
 def _stop_workers(pool: cf.ProcessPoolExecutor) -> None:
     """Stop a local pool at once (an interrupt or a failure): queued chunks are cancelled
     and the worker processes terminated, not waited for."""
@@ -249,6 +260,7 @@ def run_sweep(spec: SweepSpec, workers: int | None = None, dask: str | None = No
     workers = default_workers() if workers is None else int(workers)
     if workers < 0 or threads < 1:
         raise ParameterError("workers must be >= 0 and threads >= 1")
+    check_dask_address(dask)
     say = echo or (lambda _msg: None)
     store = Checkpoint(spec, restart=restart, say=say)
     try:

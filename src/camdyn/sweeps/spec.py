@@ -42,6 +42,7 @@ import hashlib
 import json
 import math
 import tomllib
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -75,6 +76,8 @@ METRICS = {
 _RUN_DEFAULTS = {"revolutions": 60.0, "discard": 20.0, "samples_per_revolution": 64, "rtol": 3e-7,
                  "atol": 1e-10, "chunk": 8}
 _TABLES = {"system", "vary", "run", "metrics", "output"}
+#: Most points a sweep may have [-] (10^9 at a millisecond each is 12 CPU-days).
+MAX_POINTS = 10 ** 9
 
 
 @dataclass(frozen=True)
@@ -271,6 +274,11 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
         if n != len(v.values):
             raise ParameterError(f"sweep spec: parameters zipped along {v.dimension!r} need equal numbers of "
                                  f"values ({n} and {len(v.values)} for {v.key})")
+    points = math.prod(dims.values())
+    if points > MAX_POINTS:
+        raise ParameterError(f"sweep spec: {points:.3g} points ({' x '.join(str(n) for n in dims.values())}) is more "
+                             f"than {MAX_POINTS:.0e}; at a millisecond or more each that is beyond any machine's "
+                             f"reach: coarsen the grid or split the sweep")
     # every value on its own must make a valid system (negative mass, unreachable cam, ...);
     # only combinations of values may fail (those points are recorded as failed)
     from camdyn.simulation.runner import prepare
@@ -312,11 +320,39 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
         path = base_dir / path
     if path.suffix not in (".nc", ".h5"):
         raise ParameterError(f"sweep spec: [output] path must end in .nc (netCDF4/HDF5), got {path.name!r}")
+    _check_result_size(points, names, harmonics, revolutions - discard, path)
     return SweepSpec(source=source, overrides=dict(overrides), system_toml=toml_text, vary=vary,
                      dimensions=tuple(dims.items()), revolutions=revolutions, discard=discard,
                      samples_per_revolution=samples, rtol=rtol, atol=atol, chunk=chunk,
                      metrics=tuple(dict.fromkeys(names)), harmonics=harmonics, output=path, name=name,
                      _base=base)
+
+
+def result_bytes(points: int, metrics, harmonics: int, kept: int) -> int:
+    """Size of a sweep's result [B]: its metric variables and per-point solver bookkeeping
+    (about 40 B), for ``points`` points."""
+    from camdyn.sweeps.metrics import variables
+
+    per_point = 40
+    for _, sizes, dtype, _, _ in variables(metrics, harmonics, kept).values():
+        per_point += math.prod(sizes) * {"f8": 8, "i8": 8, "i2": 2, "i1": 1}.get(dtype, 8)
+    return points * per_point
+
+
+def _check_result_size(points: int, metrics, harmonics: int, kept: int, path: Path) -> None:
+    """Refuse a sweep whose result (plus its checkpoints, as large again) does not fit on
+    the output's disk; warn when it is large."""
+    from camdyn.io.atomic import free_space
+
+    needed = 2 * result_bytes(points, metrics, harmonics, kept)
+    folder = path.parent if path.parent.exists() else Path(".")
+    free = free_space(folder)
+    if 0 <= free < needed:
+        raise ParameterError(f"sweep spec: the result and its checkpoints need about {needed / 1e9:.3g} GB but "
+                             f"{folder} has {free / 1e9:.3g} GB free")
+    if needed > 1e9:
+        warnings.warn(f"the sweep's result and checkpoints will take about {needed / 1e9:.3g} GB on disk",
+                      UserWarning, stacklevel=3)
 
 
 def load_spec(path: str | Path) -> SweepSpec:

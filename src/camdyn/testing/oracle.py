@@ -13,7 +13,7 @@ Damping laws, as the force ``F_d`` added to the Hertz force ``F_k`` while in con
 - none: 0; A (viscous): ``c delta_dot`` with ``c = 2 zeta omega_n I_P / chi*^2``
   (eq 2.24, 4.20), computed here by :func:`reference_equilibrium`;
 - B: ``beta F_k delta_dot`` (Hunt and Crossley's form, damping proportional to the
-  elastic force; docs/model.md §11); C (Zhang-Whiten): ``beta delta^(1/4) delta_dot``;
+  elastic force; docs/model.md §3.4 and §7 choice 11); C (Zhang-Whiten): ``beta delta^(1/4) delta_dot``;
 - D and E: B or C while compressing (``delta_dot > 0``), A while restoring;
 - generalized: ``beta delta^n delta_dot`` (eq 3.2, 3.14);
 - restitution laws: ``D(e) F_k delta_dot / v_approach``, with the hysteresis factors

@@ -130,8 +130,9 @@ def _checked_grid(axis: str, ratios, speeds, regime: str | None) -> tuple[np.nda
         raise ParameterError("the design grid needs finite ratios and positive speeds")
     if axis == "axis_ratio" and (np.any(ratios <= 0) or np.any(ratios > 1)):
         raise ParameterError("axis ratios b/a must lie in (0, 1]")
-    if axis == "runout" and np.any(ratios < 0):
-        raise ParameterError("runout ratios e/a must be non-negative")
+    if axis == "runout" and (np.any(ratios < 0) or np.any(ratios >= 1)):
+        raise ParameterError(f"runout ratios e/a must lie in [0, 1): the cam's pivot must be inside the cam, "
+                             f"got {', '.join(f'{r:g}' for r in ratios if not 0 <= r < 1)}")
     if regime not in (None, "boundary", "mixed", "EHL"):
         raise ParameterError(f"regime must be boundary, mixed or EHL, got {regime!r}")
     return ratios, speeds
