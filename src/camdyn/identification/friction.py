@@ -38,7 +38,7 @@ from camdyn.errors import IdentificationError, ParameterError
 from camdyn.model import layout as L
 from camdyn.model.outputs import contact_forces_from_reaction
 from camdyn.params.system import System
-from camdyn.records.schema import angular_acceleration, check_record
+from camdyn.records.schema import angular_acceleration, check_consistency, check_record
 
 __all__ = ["FrictionEstimate", "estimate_friction"]
 
@@ -415,6 +415,7 @@ def estimate_friction(system: System, record: xr.Dataset, speed: float | None = 
         raise ParameterError(f"harmonics must be a positive integer, got {harmonics!r}")
     record = angular_acceleration(record, system.follower.sensor_distance)
     check_record(record, ("Nx", "Ny", "alpha_ddot"))
+    check_consistency(record, speed=speed, runout=system.cam.runout, preset=system.name, what="the system and options")
     window = _record_window(record, speed, harmonics)
     checks, kinematics, sign = _assumption_checks(system, record, window)
     if enforce and not all(c["passed"] for c in checks.values()):

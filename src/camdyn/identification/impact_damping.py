@@ -36,6 +36,7 @@ from camdyn.identification.impact_events import ImpactEvents, impact_events
 from camdyn.identification.impact_kernel import simulate_impacts
 from camdyn.model import layout as L
 from camdyn.model.geometry import cam_angle, contact_kinematics
+from camdyn.records.schema import check_consistency
 
 __all__ = ["ImpactDampingEstimate", "ImpactProblem", "estimate_impact_damping", "residue_landscape"]
 
@@ -193,6 +194,7 @@ def _record_events(base, records, speed, runout, min_impacts: int, progress) -> 
     runouts = runout if isinstance(runout, (list, tuple)) else [runout] * n_rec
     events = []
     for rec, sp, ro in zip(records, speeds, runouts):
+        check_consistency(rec, speed=sp, runout=ro, preset=base.name, what="the options")
         ro = ro if ro is not None else rec.attrs.get("runout")
         sys_r = base.with_values(**{"cam.runout": float(ro)}) if ro is not None else base
         events.append(impact_events(sys_r, rec, speed=sp, min_impacts=min_impacts))

@@ -39,6 +39,7 @@ from camdyn.model.contact import (
     hertz_point_coefficient,
 )
 from camdyn.model.geometry import contact_kinematics
+from camdyn.records.schema import check_consistency
 
 __all__ = ["RestitutionEstimate", "estimate_restitution"]
 
@@ -89,6 +90,8 @@ def estimate_restitution(system, record=None, speed: float | None = None, min_im
         A record the reconstruction refuses, or impacts whose separation cannot be found.
     """
     if events is None:
+        if record is not None:
+            check_consistency(record, speed=speed, preset=system.name, what="the options")
         if record is not None and "runout" in record.attrs:
             system = system.with_values(**{"cam.runout": float(record.attrs["runout"])})
         events = impact_events(system, record, speed=speed, min_impacts=min_impacts, min_contact_samples=0,

@@ -9,12 +9,15 @@ A record is an :class:`xarray.Dataset` over ``time`` [s]; the channels are liste
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import xarray as xr
 
 from camdyn.errors import DataError
 
-__all__ = ["CHANNEL_UNITS", "make_record", "check_sampling", "check_record", "angular_acceleration"]
+__all__ = ["CHANNEL_UNITS", "make_record", "check_sampling", "check_record", "angular_acceleration",
+           "check_consistency"]
 
 #: SI unit and long name of every channel a record may hold.
 CHANNEL_UNITS = {
@@ -106,3 +109,47 @@ def angular_acceleration(ds: xr.Dataset, sensor_distance: float | None = None) -
     unit, long_name = CHANNEL_UNITS["alpha_ddot"]
     out["alpha_ddot"] = ("time", ds["a_t"].values / sensor_distance, {"units": unit, "long_name": long_name})
     return out
+
+
+def check_consistency(record: xr.Dataset, speed: float | None = None, runout: float | None = None,
+                      preset: str | None = None, what: str = "the options") -> None:
+    """Refuse a record whose metadata contradicts the settings it is analysed with.
+
+    A record may carry ``speed_hz`` [Hz], ``runout`` [m] and ``preset`` attributes (CSV
+    ``# key = value`` lines). An estimator given another speed or runout than the record
+    states would fit a different rig with confidence, so a difference of more than 0.5 %
+    in speed or 1 % in runout is refused; a different preset name only warns (a user's
+    own TOML of the same rig has another name).
+
+    Parameters
+    ----------
+    record : xarray.Dataset
+        The record.
+    speed : float, optional
+        Cam speed the analysis uses [Hz].
+    runout : float, optional
+        Cam runout the analysis uses [m].
+    preset : str, optional
+        Name of the system the analysis uses.
+    what : str
+        Where those settings come from, for the message.
+
+    Raises
+    ------
+    DataError
+        With both values and how to reconcile them.
+    """
+    source = record.attrs.get("source", "the record")
+    stated = record.attrs.get("speed_hz")
+    if speed is not None and stated is not None and abs(float(stated) - speed) > 5e-3 * abs(float(stated)):
+        raise DataError(f"{source} was taken at {float(stated):.6g} Hz (its metadata) but {what} give "
+                        f"{speed:.6g} Hz; leave the speed out to use the record's, or correct the metadata")
+    stated = record.attrs.get("runout")
+    if runout is not None and stated is not None and abs(float(stated) - runout) > 1e-2 * abs(float(stated)):
+        raise DataError(f"{source} was taken with cam.runout = {float(stated) * 1e3:.6g} mm (its metadata) but "
+                        f"{what} give {runout * 1e3:.6g} mm; pass --set cam.runout={float(stated) * 1e3:.6g}mm, "
+                        f"or correct the metadata")
+    stated = record.attrs.get("preset")
+    if preset is not None and stated is not None and str(stated) != preset:
+        warnings.warn(f"{source} names the preset {stated!r} but it is analysed with {preset!r}", UserWarning,
+                      stacklevel=2)
