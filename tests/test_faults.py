@@ -360,3 +360,50 @@ def test_ctrl_c_in_the_python_api_raises_keyboardinterrupt_and_the_interpreter_s
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, (out, err)
     assert out.startswith("caught") and time.time() - sent < 10.0, (out, err)
+
+
+@pytest.fixture(scope="module")
+def impact_record(tmp_path_factory):
+    from camdyn.io.measurements import write_measurement
+    from camdyn.records.synthesis import synthesize
+
+    rig = camdyn.load_system("sundar2014-impact", {"cam.runout": "3.5 mm"})
+    path = tmp_path_factory.mktemp("record") / "e20.nc"
+    write_measurement(synthesize(rig, 15.0, revolutions=21, sample_rate=204.8e3, noise=0.01, settle=100), path)
+    return path
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [1, 2])
+def test_identify_interrupted_at_a_random_moment(tmp_path, impact_record, seed):
+    delay = np.random.default_rng(seed).uniform(1.0, 5.0)
+    proc = _start(["identify", "impact-damping", "sundar2014-impact", str(impact_record), "--bootstrap", "4000",
+                   "--json"], tmp_path)
+    time.sleep(delay)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode in (0, 130), err          # 0: it finished before the signal
+    assert "Traceback" not in err, err
+    if proc.returncode == 130:
+        assert err.strip().splitlines()[-1] == "interrupted" and out == ""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [3, 4])
+def test_sweep_terminated_at_a_random_moment_resumes_bitwise(tmp_path, seed):
+    (tmp_path / "a.toml").write_text(SWEEP_TOML.format(num=24, revolutions=300, name="a"))
+    (tmp_path / "b.toml").write_text(SWEEP_TOML.format(num=24, revolutions=300, name="b"))
+    delay = np.random.default_rng(seed).uniform(2.0, 8.0)
+    proc = _start(["sweep", "a.toml", "--workers", "2", "--quiet", "--no-plot"], tmp_path)
+    time.sleep(delay)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode in (0, 143), err
+    assert "Traceback" not in err, err
+    resumed = _start(["sweep", "a.toml", "--workers", "2", "--quiet", "--no-plot"], tmp_path)
+    _, err = resumed.communicate(timeout=300)
+    assert resumed.returncode == 0, err
+    reference = run_sweep(load_spec(tmp_path / "b.toml"), workers=0, progress=False).load()
+    result = xr.load_dataset(tmp_path / "a.nc")
+    for name in reference.variables:
+        np.testing.assert_array_equal(result[name].values, reference[name].values, err_msg=name)
