@@ -235,3 +235,13 @@ def test_decimal_comma_and_numbers_side_by_side_are_refused():
     for text in ("3,5 mm", "3 4 mm"):
         with pytest.raises(CamdynError, match="comma|two numbers"):
             load_system(PRESET, parse_assignments([f"cam.runout={text}"]))
+
+
+@settings(max_examples=100, **FUZZ)
+@given(raw=st.one_of(st.binary(max_size=300), st.text(max_size=300).map(str.encode)))
+def test_sweep_spec_files(folder, raw):
+    from camdyn.sweeps import load_spec
+
+    path = folder / "spec.toml"
+    path.write_bytes(raw)
+    config_outcome(lambda: load_spec(path))

@@ -41,6 +41,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import re
 import tomllib
 import warnings
 from dataclasses import dataclass, field
@@ -82,12 +83,26 @@ MAX_POINTS = 10 ** 9
 
 @dataclass(frozen=True)
 class Vary:
-    """One varied parameter: dotted ``key``, its ``values`` in SI units along ``dimension``."""
+    """One varied parameter: dotted ``key``, its ``values`` in SI units along ``dimension``.
+
+    ``unit`` is the SI unit of ``values``; ``display_unit`` the unit the spec wrote them in
+    (``"mm"``, ``"rpm"``; the SI unit when it wrote bare numbers) and ``display_factor``
+    the display value of one SI unit (1000 for mm), for figures only.
+    """
 
     key: str
     dimension: str
     values: tuple[float, ...]
     unit: str
+    display_unit: str = ""
+    display_factor: float = 1.0
+
+    def display_attrs(self) -> dict:
+        """Attributes of the result's coordinate that name the display unit (empty when
+        the display unit is the SI unit)."""
+        if not self.display_unit or self.display_unit == self.unit:
+            return {}
+        return {"display_units": self.display_unit, "display_factor": self.display_factor}
 
 
 @dataclass(frozen=True)
@@ -239,8 +254,31 @@ def _values(i: int, entry: dict) -> Vary:
     dimension = entry.get("dimension", key)
     if not isinstance(dimension, str) or not dimension.strip():
         raise ParameterError(f"sweep spec: {where} dimension must be a name")
+    si_unit = unit if unit != "speed" else "Hz"
+    written = entry["values"][0] if "values" in entry else entry["start"]
+    display, factor = _display_unit(key, written, si_unit)
     return Vary(key=key, dimension=dimension.strip(), values=tuple(float(v) for v in values),
-                unit=unit if unit != "speed" else "Hz")
+                unit=si_unit, display_unit=display, display_factor=factor)
+
+
+#: the number at the head of a quantity's text, e.g. ``3.5`` of ``"3.5 mm"``
+_LEADING_NUMBER = re.compile(r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*")
+
+
+def _display_unit(key: str, raw, si_unit: str) -> tuple[str, float]:
+    """The unit a swept value was written in (``"3.5 mm"`` -> ``"mm"``) and the display
+    value of one SI unit (1000); the SI unit and 1 for bare numbers and for units with an
+    offset (degC)."""
+    text = _LEADING_NUMBER.sub("", raw, count=1).strip() if isinstance(raw, str) else ""
+    if not text or text == si_unit:
+        return si_unit, 1.0
+    try:
+        one, zero = (float(convert_value(key, f"{x} {text}", {})) for x in (1, 0))
+    except CamdynError:
+        return si_unit, 1.0
+    if zero != 0.0 or not math.isfinite(one) or one <= 0.0:
+        return si_unit, 1.0
+    return text, 1.0 / one
 
 
 def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep") -> SweepSpec:
@@ -361,7 +399,10 @@ def load_spec(path: str | Path) -> SweepSpec:
     if not path.is_file():
         raise ParameterError(f"sweep spec {str(path)!r} does not exist")
     try:
-        table = tomllib.loads(path.read_text())
+        table = tomllib.loads(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError as exc:
+        raise ParameterError(f"sweep spec {path.name}: not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
+                             f"{exc.start}); a sweep spec is TOML, saved as UTF-8") from None
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"sweep spec {path.name}: not valid TOML ({exc})") from None
     return spec_from_dict(table, base_dir=path.parent, name=path.stem)
