@@ -407,3 +407,34 @@ def test_sweep_terminated_at_a_random_moment_resumes_bitwise(tmp_path, seed):
     result = xr.load_dataset(tmp_path / "a.nc")
     for name in reference.variables:
         np.testing.assert_array_equal(result[name].values, reference[name].values, err_msg=name)
+
+
+INLINE_SWEEP_SCRIPT = """
+import sys, time
+from camdyn.sweeps import run_sweep, spec_from_dict
+spec = spec_from_dict({"system": {"source": "sundar2014-impact"},
+                       "vary": [{"key": "motion.speed", "start": "8 Hz", "stop": "25 Hz", "num": 400}],
+                       "run": {"revolutions": 400, "discard": 10, "chunk": 64},
+                       "metrics": {"names": ["impacts"]}, "output": {"path": "inline.nc"}})
+run_sweep(spec, workers=0, progress=False, restart=True) if len(sys.argv) > 1 else None
+print("ready", flush=True)
+try:
+    run_sweep(spec, workers=0, progress=False)
+except KeyboardInterrupt:
+    print("caught", flush=True)
+    sys.exit(0)
+sys.exit(3)
+"""
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_an_inline_sweep_at_once(tmp_path):
+    proc = subprocess.Popen([sys.executable, "-c", INLINE_SWEEP_SCRIPT], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, preexec_fn=_default_sigint, cwd=tmp_path)
+    assert proc.stdout.readline().strip() == "ready"
+    time.sleep(3.0)      # inside the first chunk of 64 points (several seconds of work)
+    sent = time.time()
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0 and out.strip() == "caught", (out, err)
+    assert time.time() - sent < 2.0, "the compiled kernel did not stop between points"

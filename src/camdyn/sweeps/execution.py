@@ -33,6 +33,7 @@ import contextlib
 import multiprocessing
 import os
 import re
+import threading
 
 import numpy as np
 import xarray as xr
@@ -132,9 +133,34 @@ def _finish(prepared: dict, result: dict) -> dict:
 
 def compute_chunk(spec: SweepSpec, chunk: int, threads: int = 1) -> dict:
     """Simulate chunk ``chunk`` of ``spec`` in this process and return its metric and
-    bookkeeping arrays (what a worker computes, merged with the preparation)."""
+    bookkeeping arrays (what a worker computes, merged with the preparation).
+
+    The compiled kernel runs on a helper thread (it releases the GIL) while this thread
+    waits, so that Ctrl-C raises ``KeyboardInterrupt`` here at once: the kernel is told
+    to stop through its abort flag and skips the points it has not begun.
+    """
     prepared = prepare_chunk(spec, chunk)
-    return _finish(prepared, worker.run_chunk(*_run_args(spec, prepared, threads)))
+    abort = np.zeros(1, dtype=np.int64)
+    result = {}
+
+    def run():
+        try:
+            result["value"] = worker.run_chunk(*_run_args(spec, prepared, threads), abort=abort)
+        except BaseException as exc:   # handed to the waiting thread
+            result["error"] = exc
+
+    thread = threading.Thread(target=run, name="camdyn-chunk", daemon=True)
+    thread.start()
+    try:
+        while thread.is_alive():
+            thread.join(0.05)
+    except BaseException:
+        abort[0] = 1
+        thread.join()
+        raise
+    if "error" in result:
+        raise result["error"]
+    return _finish(prepared, result["value"])
 
 
 def _warm_point(base):

@@ -30,7 +30,7 @@ _DERIVED = (0, 3, 8, 14)   # columns of outputs.CHANNELS: alpha_ddot, Fn, slidin
 
 
 @numba.njit(cache=True, parallel=True, nogil=True)
-def simulate_points(params, starts, periods, revolutions, discard, samples, rtol, atol, max_steps):
+def simulate_points(params, starts, periods, revolutions, discard, samples, rtol, atol, max_steps, abort=None):
     """Simulate every point of a batch.
 
     Parameters
@@ -49,6 +49,10 @@ def simulate_points(params, starts, periods, revolutions, discard, samples, rtol
         Local error tolerances.
     max_steps : int
         Step limit per point.
+    abort : ndarray (1,), optional
+        Set ``abort[0]`` nonzero from another thread to stop: the points not yet begun are
+        skipped with status ``STATUS_INTERRUPTED`` (the kernel releases the GIL, so the
+        caller's thread can do this on Ctrl-C while it runs).
 
     Returns
     -------
@@ -72,6 +76,9 @@ def simulate_points(params, starts, periods, revolutions, discard, samples, rtol
     for i in numba.prange(n):
         period = periods[i]
         if not (period > 0.0):
+            continue
+        if abort is not None and abort[0] != 0:
+            counters[i, driver.COUNT_STATUS] = driver.STATUS_INTERRUPTED
             continue
         p = params[i]
         t_start_window = discard * period

@@ -249,6 +249,7 @@ def _coordinates(f, spec: SweepSpec) -> None:
             var[:] = np.asarray(v.values)
             var.attrs["units"] = v.unit
             var.attrs["long_name"] = f"swept parameter {v.key}"
+            var.attrs.update(v.display_attrs())
 
 
 def _variable(f, name, dims, dtype, unit, long_name, coords):

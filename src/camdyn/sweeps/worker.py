@@ -82,7 +82,7 @@ def _watch_parent(parent: int, interval: float = 0.5) -> None:
 
 
 def run_chunk(params: np.ndarray, starts: np.ndarray, periods: np.ndarray, ok: np.ndarray, run: tuple,
-              metrics, harmonics: int, threads: int = 1) -> dict:
+              metrics, harmonics: int, threads: int = 1, abort: np.ndarray | None = None) -> dict:
     """Simulate a chunk of prepared points and reduce it to its metrics.
 
     Parameters
@@ -97,6 +97,9 @@ def run_chunk(params: np.ndarray, starts: np.ndarray, periods: np.ndarray, ok: n
         The spec's metric names and number of harmonics.
     threads : int
         Numba threads [-].
+    abort : ndarray (1,) of int64, optional
+        Stop flag another thread may set (see :func:`camdyn.sweeps.kernel.simulate_points`);
+        the chunk then raises ``KeyboardInterrupt`` instead of returning.
 
     Returns
     -------
@@ -106,8 +109,12 @@ def run_chunk(params: np.ndarray, starts: np.ndarray, periods: np.ndarray, ok: n
     """
     _threads(threads)
     revolutions, discard, samples, rtol, atol, max_steps = run
+    if abort is None:
+        abort = np.zeros(1, dtype=np.int64)
     window, onsets, impact_force, counters = kernel.simulate_points(
-        params, starts, periods, revolutions, discard, samples, rtol, atol, max_steps)
+        params, starts, periods, revolutions, discard, samples, rtol, atol, max_steps, abort)
+    if abort[0] != 0:
+        raise KeyboardInterrupt
     solver = counters[:, driver.COUNT_STATUS]
     good = ok & (solver == driver.STATUS_OK)
     out = M.compute(window, onsets, impact_force, periods, good, metrics, harmonics, samples)
