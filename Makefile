@@ -12,16 +12,22 @@ $(BIN)/.installed: pyproject.toml
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $@
 
-.PHONY: demo test bench install clean mutation
+.PHONY: demo test bench install clean mutation docs docs-full docs-links figures
 install: $(BIN)/.installed
 
 demo: $(BIN)/.installed
-	$(BIN)/camdyn demo --out out
+	$(BIN)/camdyn demo --out out --force
 
 test: $(BIN)/.installed
 	$(BIN)/ruff check src tests tools benchmarks examples
 	$(BIN)/lint-imports
 	$(BIN)/python -m pytest -q
+
+# the README's and docs' figures from the current code, with the numbers each shows in
+# docs/figures/figures.json (tools/make_figures.py, about 6 minutes; FIGURES_ARGS=--slow adds
+# the long table and gallery scripts, about 20 minutes more)
+figures: $(BIN)/.installed
+	$(BIN)/python tools/make_figures.py $(FIGURES_ARGS)
 
 # deliberate physics mistakes (tools/mutation_check.py) must make a fast test subset fail
 mutation: $(BIN)/.installed
@@ -31,5 +37,26 @@ bench: $(BIN)/.installed
 	$(BIN)/python benchmarks/bench_simulate.py
 	$(BIN)/python benchmarks/bench_identify.py
 
+# documentation site (Sphinx) in docs/_build/html: `make docs` runs the gallery scripts of
+# examples/gallery/ (a few seconds each) and fails on any warning or broken internal link;
+# `make docs-full` first regenerates every figure of docs/figures/ (`make figures` with the
+# slow table and gallery scripts of examples/, about 25 minutes on 2 cores)
+$(BIN)/.docs-installed: $(BIN)/.installed
+	$(BIN)/python -m pip install --quiet -e ".[docs]"
+	touch $@
+
+docs: $(BIN)/.docs-installed
+	rm -rf docs/_build/html
+	$(BIN)/sphinx-build -E -W --keep-going -b html docs docs/_build/html
+	$(BIN)/python tools/check_links.py docs/_build/html
+
+# internal links and images of an existing build, offline (no `sphinx-build -b linkcheck`)
+docs-links:
+	$(BIN)/python tools/check_links.py docs/_build/html
+
+docs-full: $(BIN)/.docs-installed
+	$(MAKE) figures FIGURES_ARGS=--slow
+	$(MAKE) docs
+
 clean:
-	rm -rf $(VENV) out .pytest_cache
+	rm -rf $(VENV) out .pytest_cache docs/_build docs/api docs/auto_examples

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import ast
 import importlib
-import os
+import inspect
 import sys
 from pathlib import Path
 
@@ -24,6 +24,7 @@ matplotlib.use("Agg")
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 sys.path.insert(0, str(ROOT / "src"))  # the checkout, even without an editable install
+sys.path.insert(0, str(DOCS / "_ext"))  # gallery_order
 
 import camdyn  # noqa: E402
 
@@ -39,7 +40,6 @@ extensions = [
     "myst_parser",
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
-    "sphinx.ext.mathjax",
     "numpydoc",
     "sphinx_gallery.gen_gallery",
 ]
@@ -47,9 +47,10 @@ extensions = [
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
 templates_path = ["_templates"]
-exclude_patterns = ["_build", "**/.ipynb_checkpoints", "auto_examples/*.ipynb", "auto_examples/*.py",
+exclude_patterns = ["_build", "_ext", "**/.ipynb_checkpoints", "auto_examples/*.ipynb", "auto_examples/*.py",
                     "auto_examples/*.zip", "auto_examples/*.json", "auto_examples/*.md5"]
 nitpicky = False
+toc_object_entries = False  # the "on this page" column lists sections, not every constant
 # every warning is an error in `make docs` (-W); none is silenced here
 
 # -- MyST: the Markdown pages of docs/ --------------------------------------------------------
@@ -58,9 +59,8 @@ myst_enable_extensions = ["colon_fence", "deflist"]
 # "## 1. Frames and conventions" gets the anchor #1-frames-and-conventions, as on GitHub,
 # so the pages' intra-document links resolve in both places
 myst_heading_anchors = 4
-# links to files outside docs/ (README.md, examples/x.py): shown as links to the repository's
-# files relative to the page on a forge, checked by tools/check_links.py only inside the site
-myst_url_schemes = ["http", "https", "mailto"]
+# a page that links to a file outside docs/ (../README.md, ../examples/x.py) fails the build
+# (the site holds no such file): name such files as literal paths, `examples/x.py`
 
 # pages written by scripts without a title of their own: given one when read (the files
 # stay as the scripts write them)
@@ -70,9 +70,24 @@ GENERATED_PAGE_TITLES = {
 
 
 def _add_title(app, docname, source):
+    """Give a generated page its title, and raise its headings to sections under it."""
     title = GENERATED_PAGE_TITLES.get(docname)
-    if title and not source[0].lstrip().startswith("# "):
-        source[0] = f"# {title}\n\n" + source[0]
+    if not title or source[0].lstrip().startswith("# "):
+        return
+    lines = source[0].split("\n")
+    fence = False
+    levels = []
+    for line in lines:
+        fence ^= line.startswith("```")
+        if not fence and line.startswith("#"):
+            levels.append(len(line) - len(line.lstrip("#")))
+    shift = min(levels, default=2) - 2
+    fence = False
+    for i, line in enumerate(lines):
+        fence ^= line.startswith("```")
+        if not fence and line.startswith("#") and shift > 0:
+            lines[i] = line[shift:]
+    source[0] = f"# {title}\n\n" + "\n".join(lines)
 
 
 # -- API reference -------------------------------------------------------------------------
@@ -84,6 +99,7 @@ API_PACKAGES = [
     "camdyn.tribology", "camdyn.records", "camdyn.io", "camdyn.sweeps", "camdyn.plotting", "camdyn.errors",
 ]
 API_DIR = DOCS / "api"
+_STUBS: set[str] = set()  # the names that get a page of their own (autosummary stubs)
 
 
 def _defined_names(path: Path) -> list[str]:
@@ -112,8 +128,10 @@ def public_names(module) -> list[str]:
 def _kind(obj) -> str:
     if isinstance(obj, type):
         return "exception" if issubclass(obj, BaseException) else "class"
-    if callable(obj) and hasattr(obj, "__name__") and (hasattr(obj, "__code__") or hasattr(obj, "py_func")):
-        return "function"
+    if callable(obj):
+        inner = getattr(obj, "py_func", None) or inspect.unwrap(obj)  # numba dispatchers, lru_cache
+        if inspect.isfunction(inner) or inspect.isbuiltin(inner):
+            return "function"
     return "data"
 
 
@@ -151,9 +169,10 @@ def _module_section(name: str, char: str) -> str:
         groups[_kind(getattr(module, n))].append(n)
     titles = {"class": "Classes", "exception": "Exceptions", "function": "Functions"}
     for kind in ("class", "exception", "function"):
+        _STUBS.update(f"{name}.{n}" for n in groups[kind])
         if groups[kind]:
             out.append(f".. rubric:: {titles[kind]}\n\n.. autosummary::\n   :toctree: generated\n"
-                       f"   :nosignatures:\n\n" + "".join(f"   {name}.{n}\n" for n in groups[kind]))
+                       f"   :nosignatures:\n\n" + "".join(f"   {n}\n" for n in groups[kind]))
     if groups["data"]:
         out.append(".. rubric:: Constants\n")
         for n in groups["data"]:
@@ -170,13 +189,18 @@ def write_api_pages() -> None:
     pages = {}
     top = ["camdyn", "======", "", ".. module:: camdyn", "", camdyn.__doc__.split("\n\n")[0].strip(), "",
            "The names below are importable from ``camdyn`` directly (``camdyn.simulate``, ...); each is "
-           "documented where it is defined.", "", ".. list-table::", "   :header-rows: 1", "",
-           "   * - name", "     - defined in", "     - summary"]
+           "documented in full where it is defined.", ""]
     for n in camdyn.__all__:
         obj = getattr(camdyn, n)
-        home = obj.__module__
-        role = "class" if isinstance(obj, type) else "func"
-        top += [f"   * - :{role}:`camdyn.{n} <{home}.{n}>`", f"     - :mod:`{home}`", f"     - {_first_line(obj)}"]
+        home = f"{obj.__module__}.{n}"
+        if isinstance(obj, type):
+            kind = "exception" if issubclass(obj, BaseException) else "class"
+            top += [f".. py:{kind}:: {n}", "", f"   {_first_line(obj)} See :class:`{home}`.", ""]
+        else:
+            signature = inspect.signature(obj).replace(return_annotation=inspect.Signature.empty)
+            signature = signature.replace(parameters=[p.replace(annotation=inspect.Parameter.empty)
+                                                      for p in signature.parameters.values()])
+            top += [f".. py:function:: {n}{signature}", "", f"   {_first_line(obj)} See :func:`{home}`.", ""]
     pages["camdyn"] = "\n".join(top) + "\n"
     for package_name in API_PACKAGES:
         package = importlib.import_module(package_name)
@@ -201,6 +225,13 @@ def write_api_pages() -> None:
         path = API_DIR / f"{name}.rst"
         if not path.exists() or path.read_text(encoding="utf-8") != text:
             path.write_text(text, encoding="utf-8")
+    # pages of names that are gone (renamed, moved, made private) would be orphans
+    for path in API_DIR.glob("*.rst"):
+        if path.stem not in pages:
+            path.unlink()
+    for path in (API_DIR / "generated").glob("*.rst"):
+        if path.stem not in _STUBS:
+            path.unlink()
 
 
 write_api_pages()
@@ -210,7 +241,6 @@ autosummary_imported_members = False
 autodoc_default_options = {"member-order": "bysource"}
 autodoc_typehints = "none"  # numpydoc's Parameters sections carry the types and units
 autodoc_preserve_defaults = True
-autodoc_mock_imports = ["pyuff"]  # optional dependency (measurements extra)
 numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
 numpydoc_attributes_as_param_list = True
@@ -218,12 +248,13 @@ numpydoc_xref_param_type = False
 
 # -- gallery -------------------------------------------------------------------------------
 
-os.environ.setdefault("CAMDYN_DOCS", "1")
 sphinx_gallery_conf = {
     "examples_dirs": str(ROOT / "examples" / "gallery"),
     "gallery_dirs": "auto_examples",
     "filename_pattern": r"/plot_",
-    "within_subsection_order": "FileNameSortKey",
+    # every build runs every script again: the figures show what the current code does
+    "run_stale_examples": True,
+    "within_subsection_order": "gallery_order.GalleryOrder",
     "download_all_examples": False,
     "write_computation_times": False,
     "remove_config_comments": True,

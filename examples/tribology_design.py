@@ -15,7 +15,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import camdyn  # noqa: E402
-from camdyn.plotting import plot_contact_conditions, plot_design_map  # noqa: E402
+from camdyn.plotting import figure_style, plot_contact_conditions, plot_design_map  # noqa: E402
 from camdyn.tribology import contact_conditions, normalized_friction  # noqa: E402
 from camdyn.tribology.benedict_kelley import benedict_kelley, operating_term  # noqa: E402
 from camdyn.tribology.design import design_map  # noqa: E402
@@ -47,20 +47,19 @@ def main():
     p_mean = float(cc["peak_pressure"].mean())
     velocity = float(np.mean(np.abs(cc["sliding_velocity"].values) * cc["sum_velocity"].values ** 2))
     rm = np.linspace(0.2e-6, 0.7e-6, 50)
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
-    for name, eta, c1, c2 in (("AGMA 4EP", 0.034, 0.0288e-6, 2.03e-6), ("ISO 32", 0.012, 0.0509e-6, 1.6512e-6)):
-        term = operating_term(p_mean, eta, velocity)
-        axes[0].plot(rm * 1e6, benedict_kelley(rm, term, c1, c2), label=f"{name} (log term {term:.2f})")
-        axes[1].plot(rm * 1e6, normalized_friction(rm, c1, c2), label=name)
-    axes[0].set_ylabel("coefficient of friction mu [-]")
-    axes[1].set_ylabel("normalized friction mu_bar = C1/(C2 - Rm) [-]")
-    for ax in axes:
-        ax.set_xlabel("mean roughness Rm [um]")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8)
-    fig.suptitle("modified Benedict-Kelley law with the thesis's constants (e/a = 0.116, 11.55 Hz)")
-    fig.tight_layout()
-    fig.savefig(FIGURES / "benedict_kelley.png", dpi=110)
+    with figure_style():
+        fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+        for name, eta, c1, c2 in (("AGMA 4EP", 0.034, 0.0288e-6, 2.03e-6), ("ISO 32", 0.012, 0.0509e-6, 1.6512e-6)):
+            term = operating_term(p_mean, eta, velocity)
+            axes[0].plot(rm * 1e6, benedict_kelley(rm, term, c1, c2), label=f"{name} (log term {term:.2f})")
+            axes[1].plot(rm * 1e6, normalized_friction(rm, c1, c2), label=name)
+        axes[0].set_ylabel(r"friction coefficient $\mu$ [-]")
+        axes[1].set_ylabel(r"$\bar\mu = C_1/(C_2 - R_m)$ [-]")
+        for ax in axes:
+            ax.set_xlabel("mean roughness $R_m$ [µm]")
+            ax.legend()
+        fig.suptitle("modified Benedict-Kelley law with the thesis's constants (e/a = 0.116, 11.55 Hz)")
+        fig.savefig(FIGURES / "benedict_kelley.png", dpi=120)
     print(f"Benedict-Kelley: <p> = {p_mean / 1e9:.3g} GPa, <|vr| ve^2> = {velocity:.3g} m^3/s^3")
 
 

@@ -15,9 +15,11 @@ def test_synthesize_and_identify_friction(tmp_path, capsys):
     capsys.readouterr()
     assert main(["identify", "friction", "sundar2014-friction", str(data), "--set", "cam.runout=5.25mm",
                  "--json"]) == 0
-    out = json.loads(capsys.readouterr().out)
-    for key in ("mu", "Nx_dc", "Ny_dc", "speed_hz", "checks"):
+    doc = json.loads(capsys.readouterr().out)
+    out = doc["summary"]
+    for key in ("mu", "Nx_dc", "Ny_dc", "speed_hz"):
         assert key in out
+    assert "checks" in doc
     assert out["mu"] == pytest.approx(0.3, rel=0.02)
     assert out["speed_hz"] == pytest.approx(11.55)
 
@@ -38,7 +40,7 @@ def test_modal_damping_cli(tmp_path, capsys):
     assert main(["synthesize-impulse", "--damping", "0.02", "--noise", "0.01", "--out", str(data)]) == 0
     capsys.readouterr()
     assert main(["identify", "modal-damping", str(data), "--band", "500:1400", "--plot", str(plot), "--json"]) == 0
-    out = json.loads(capsys.readouterr().out)
+    out = json.loads(capsys.readouterr().out)["summary"]
     assert out["damping_ratio"] == pytest.approx(0.02, rel=0.03)
     assert plot.is_file()
 
@@ -48,12 +50,12 @@ def test_tribology_and_design_cli(tmp_path, capsys):
     assert main(["tribology", "sundar2014-friction", "--speed", "11.55Hz", "--lubricant", "iso-32",
                  "--plot", str(plot), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["regime"] in ("boundary", "mixed", "EHL")
-    assert out["peak_pressure"]["units"] == "Pa" and plot.is_file()
+    assert out["summary"]["regime"] in ("boundary", "mixed", "EHL")
+    assert out["quantities"]["peak_pressure"]["units"] == "Pa" and plot.is_file()
     fig = tmp_path / "d.png"
     assert main(["design", "sundar2014-friction", "--ratios", "0.1,0.3", "--speeds", "8Hz:20Hz:4",
                  "--plot", str(fig), "--out", str(tmp_path / "d.nc"), "--json"]) == 0
-    out = json.loads(capsys.readouterr().out)
+    out = json.loads(capsys.readouterr().out)["summary"]
     assert out["points"] == 8 and fig.is_file()
 
 
@@ -82,7 +84,7 @@ def test_identify_impact_damping_and_restitution(tmp_path, capsys):
     capsys.readouterr()
     assert main(["identify", "impact-damping", "sundar2014-impact", str(a), "--fix-n", "1.5", "--bootstrap", "8",
                  "--json"]) == 0
-    out = json.loads(capsys.readouterr().out)
+    out = json.loads(capsys.readouterr().out)["summary"]
     for key in ("beta", "n", "residue", "impacts_used", "damping_at_peak", "peak_penetration"):
         assert key in out
     assert out["n"] == 1.5 and out["impacts_used"] == 10
@@ -97,7 +99,7 @@ def test_identify_impact_damping_and_restitution(tmp_path, capsys):
     capsys.readouterr()
     assert main(["identify", "restitution", "sundar2014-impact", str(s3), "--plot", str(tmp_path / "xi.png"),
                  "--json"]) == 0
-    out = json.loads(capsys.readouterr().out)
+    out = json.loads(capsys.readouterr().out)["summary"]
     assert out["gamma"] == pytest.approx(0.8, rel=0.05)
     # the Hunt-Crossley equivalent of the true law: (3/2) 0.8 s/m x 8.0 GN/m^1.5 (thesis 3.8.3),
     # within the 5 % of gamma and 1 % of K

@@ -57,6 +57,12 @@ def _start(args, cwd, **kw):
                             **kw)
 
 
+@pytest.fixture(autouse=True)
+def _in_tmp_path(tmp_path, monkeypatch):
+    """A sweep spec's relative output is the working directory's: work in the test's folder."""
+    monkeypatch.chdir(tmp_path)
+
+
 def _wait_for(predicate, timeout=120.0):
     deadline = time.time() + timeout
     while time.time() < deadline:

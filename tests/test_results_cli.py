@@ -107,7 +107,7 @@ def test_cli_simulate_json(tmp_path):
 
 def test_cli_equilibrium_json(capsys):
     assert main(["equilibrium", "sundar2014-friction", "--json"]) == 0
-    data = json.loads(capsys.readouterr().out)
+    data = json.loads(capsys.readouterr().out)["summary"]
     assert data["in_contact"] is True
     assert 500 < data["natural_frequency_Hz"] < 2000
 

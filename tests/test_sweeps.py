@@ -292,7 +292,8 @@ path = "{name}.nc"
 """
 
 
-def test_sigkill_then_resume_gives_the_uninterrupted_result(tmp_path):
+def test_sigkill_then_resume_gives_the_uninterrupted_result(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)     # a spec's relative output is the working directory's
     (tmp_path / "a.toml").write_text(SPEC_TOML.format(num=60, revolutions=300, name="a"))
     (tmp_path / "b.toml").write_text(SPEC_TOML.format(num=60, revolutions=300, name="b"))
     parts = tmp_path / "a.nc.parts"
@@ -322,7 +323,8 @@ def test_sigkill_then_resume_gives_the_uninterrupted_result(tmp_path):
            {k: v for k, v in reference.attrs.items() if k != "title"}
 
 
-def test_cli_sweep_writes_result_and_figure(tmp_path, capsys):
+def test_cli_sweep_writes_result_and_figure(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)     # a spec's relative output is the working directory's
     spec = tmp_path / "c.toml"
     spec.write_text(SPEC_TOML.format(num=4, revolutions=30, name="c"))
     assert main(["sweep", str(spec), "--workers", "0", "--quiet"]) == 0

@@ -1,5 +1,12 @@
 """Spectra of simulated responses: cam harmonics and the resonance peaks between them
-(thesis figs 2.10, 2.16)."""
+(thesis figs 2.10, 2.16).
+
+A spectral peak counts as a resonance only when it stands clear of both the integration
+noise and the cam harmonics' leakage: above :data:`NOISE_FLOOR` times the median
+amplitude above the cam speed, and above :data:`RELATIVE_FLOOR` times the largest cam
+harmonic (:func:`peak_threshold`). The same rule marks the peaks of the figures
+(:func:`camdyn.plotting.plot_spectrum`) and lists them in :func:`spectrum_summary`.
+"""
 
 from __future__ import annotations
 
@@ -10,26 +17,69 @@ from scipy.signal import find_peaks
 from camdyn.analysis.harmonics import amplitude_spectrum, harmonic_amplitudes
 from camdyn.errors import ParameterError
 
-__all__ = ["resonance_peaks", "spectrum_summary"]
+__all__ = ["NOISE_FLOOR", "RELATIVE_FLOOR", "peak_rule", "peak_threshold", "resonance_peaks",
+           "spectrum_summary"]
+
+#: a resonance peak stands above this many times the median amplitude above the cam speed [-]
+NOISE_FLOOR = 10.0
+#: ... and above this fraction of the largest cam-harmonic amplitude [-]
+RELATIVE_FLOOR = 1e-4
+
+
+def peak_rule(floor: float = NOISE_FLOOR, relative: float = RELATIVE_FLOOR) -> str:
+    """The peak rule in words (for figures and reports)."""
+    return (f"peaks above {floor:g}x the median amplitude above the cam speed "
+            f"and above {relative:g} of the largest cam harmonic")
+
+
+def _near_harmonic(freq: np.ndarray, speed: float, guard: float) -> np.ndarray:
+    order = freq / speed
+    return (np.abs(order - np.round(order)) < guard) & (np.round(order) >= 1)
+
+
+def peak_threshold(freq: np.ndarray, amp: np.ndarray, speed: float, floor: float = NOISE_FLOOR,
+                   relative: float = RELATIVE_FLOOR, guard: float = 0.25) -> float:
+    """Smallest amplitude a resonance peak must exceed [unit of ``amp``].
+
+    ``max(floor * median(amp[freq > speed]), relative * A_max)``, with ``A_max`` the
+    largest amplitude within ``guard`` cam orders of a cam harmonic (order 1 and up).
+
+    Parameters
+    ----------
+    freq, amp : ndarray
+        One-sided spectrum: frequencies [Hz] and amplitudes [any unit].
+    speed : float
+        Cam speed [Hz].
+    floor, relative : float
+        Multiple of the median [-] and fraction of the largest harmonic [-].
+    guard : float
+        Half-width of a harmonic's neighbourhood [cam orders].
+    """
+    above = freq > speed
+    noise = floor * float(np.median(amp[above])) if np.any(above) else 0.0
+    near = _near_harmonic(freq, speed, guard)
+    largest = float(np.max(amp[near])) if np.any(near) else 0.0
+    return max(noise, relative * largest)
 
 
 def resonance_peaks(freq: np.ndarray, amp: np.ndarray, speed: float, count: int = 3,
-                    guard: float = 0.25, floor: float = 10.0) -> list[tuple[float, float]]:
-    """The ``count`` largest spectral peaks that are not cam harmonics.
+                    guard: float = 0.25, floor: float = NOISE_FLOOR,
+                    relative: float = RELATIVE_FLOOR) -> list[tuple[float, float]]:
+    """The ``count`` largest spectral peaks that are not cam harmonics and stand above
+    :func:`peak_threshold`.
 
     A peak within ``guard`` of a cam order (``|f/speed - k| < guard``) is a harmonic and
-    is left out; so is a peak less than ``floor`` times the spectrum's median amplitude
-    above the cam speed (integration noise). The rest are resonances (the contact mode,
-    its side bands).
+    is left out; so is a peak at or below ``max(floor x median amplitude above the cam
+    speed, relative x largest cam harmonic)`` (integration noise, leakage). The rest are
+    resonances (the contact mode, its side bands).
 
     Returns
     -------
     list of (frequency [Hz], amplitude [unit of ``amp``]), largest first.
     """
     idx, _ = find_peaks(amp)
-    order = freq[idx] / speed
-    noise = floor * np.median(amp[freq > speed]) if np.any(freq > speed) else 0.0
-    keep = idx[(np.abs(order - np.round(order)) >= guard) & (amp[idx] > noise)]
+    threshold = peak_threshold(freq, amp, speed, floor, relative, guard)
+    keep = idx[~_near_harmonic(freq[idx], speed, guard) & (freq[idx] > speed * guard) & (amp[idx] > threshold)]
     keep = keep[np.argsort(amp[keep])[::-1][:count]]
     return [(float(freq[i]), float(amp[i])) for i in keep]
 
@@ -37,7 +87,11 @@ def resonance_peaks(freq: np.ndarray, amp: np.ndarray, speed: float, count: int 
 def spectrum_summary(ds: xr.Dataset, variable: str = "alpha_ddot", window: int = 20, harmonics: int = 10,
                      peaks: int = 3) -> dict:
     """Cam-harmonic amplitudes and resonance peaks of ``variable`` over the last
-    ``window`` whole revolutions of a simulation (units of the variable)."""
+    ``window`` whole revolutions of a simulation (units of the variable).
+
+    The peaks follow :func:`resonance_peaks` (the rule is in ``"peak_rule"``, the
+    amplitude they had to exceed in ``"peak_threshold"``).
+    """
     speed = float(ds.attrs["speed_hz"])
     total = (float(ds.time[-1]) - float(ds.time[0])) * speed
     if window < 1 or window > total - 1:
@@ -54,4 +108,5 @@ def spectrum_summary(ds: xr.Dataset, variable: str = "alpha_ddot", window: int =
             "natural_frequency_hz": float(ds.attrs.get("natural_frequency_Hz", float("nan"))),
             "harmonics": [{"order": k, "frequency_hz": k * speed, "amplitude": float(a)}
                           for k, a in zip(range(1, harmonics + 1), amps)],
+            "peak_rule": peak_rule(), "peak_threshold": peak_threshold(freq, amp, speed),
             "peaks": [{"frequency_hz": f, "amplitude": a} for f, a in resonance_peaks(freq, amp, speed, peaks)]}

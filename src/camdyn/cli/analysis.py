@@ -8,7 +8,8 @@ from typing import List, Optional
 
 import typer
 
-from camdyn.cli.common import SetOption, check_outputs, console, load_source, print_json
+from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, load_source, notice_if_uncached
+from camdyn.cli.outputs import announce, check_outputs, emit_json
 from camdyn.errors import ParameterError
 
 _ALIASES = {"speed": "motion.speed"}
@@ -46,8 +47,10 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
                        plot: Optional[Path] = typer.Option(None, help="Figure (default: the result's name, .png)."),
                        workers: Optional[int] = typer.Option(None, help="Worker processes (default every core)."),
                        dask: Optional[str] = typer.Option(None, help="'local' or a scheduler tcp://HOST:PORT."),
-                       restart: bool = typer.Option(False, help="Discard checkpoints instead of resuming."),
-                       quiet: bool = typer.Option(False, help="No progress bar.")):
+                       restart: bool = typer.Option(False, "--restart", help="Discard checkpoints instead of "
+                                                                             "resuming."),
+                       force: bool = ForceOption,
+                       quiet: bool = typer.Option(False, "--quiet", help="No progress bar.")):
     """Regime map over two parameters: every point simulated (contact kept, vr reversal, k
     impacts per revolution, irregular), beside the inverse-kinematics prediction."""
     from camdyn.params.config import parse_assignments
@@ -55,7 +58,7 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
     from camdyn.sweeps import spec_from_dict
     from camdyn.sweeps.regime_map import regime_map
 
-    check_outputs(netcdf=out, figure=plot or out.with_suffix(".png"))
+    check_outputs(netcdf=out, figure=plot or out.with_suffix(".png"), force=force)
     first, second = _axis(x, "--x"), _axis(y, "--y")
     if first["key"] == second["key"]:
         raise ParameterError("--x and --y vary the same parameter")
@@ -65,11 +68,13 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
              "metrics": {"names": ["regime", "impacts", "residual", "max_force"]},
              "output": {"path": str(out)}}
     spec = spec_from_dict(table, name=out.stem)
+    notice_if_uncached(sweeps=True)
     ds = regime_map(spec, workers=workers, dask=dask, progress=not quiet, restart=restart,
-                    echo=lambda msg: console.print(msg, highlight=False, soft_wrap=True))
-    figure = plot_regime_map(ds, plot or out.with_suffix(".png"))
+                    echo=lambda msg: console.print(msg, markup=False, highlight=False, soft_wrap=True))
+    announce(out)
+    announce(plot_regime_map(ds, plot or out.with_suffix(".png")))
     a = {k[len("agreement_"):]: ds.attrs[k] for k in ds.attrs if k.startswith("agreement_")}
-    console.print(f"wrote {out} and {figure}; simulation agrees with inverse kinematics at "
+    console.print(f"simulation agrees with inverse kinematics at "
                   f"{a['kept_agree']}/{a['kept']} points kept in contact and {a['lost_agree']}/{a['lost']} "
                   f"beyond the loss of contact", highlight=False, soft_wrap=True)
 
@@ -83,8 +88,9 @@ def spectrum(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              sample_rate: str = typer.Option("20kHz", help="Output sample rate."),
              harmonics: int = typer.Option(10, help="Cam harmonics listed."),
              peaks: int = typer.Option(3, help="Largest peaks away from the cam harmonics listed (resonances)."),
-             plot: Optional[Path] = typer.Option(None, help="Figure path (PNG)."),
-             json_: bool = typer.Option(False, "--json", help="Print JSON.")):
+             plot: Optional[Path] = typer.Option(None, help="Figure path (.png, .pdf, ...)."),
+             force: bool = ForceOption,
+             json_: bool = JsonOption):
     """Amplitude spectrum of a simulated response: cam harmonics, resonance peaks and the
     linearized natural frequency."""
     from camdyn.analysis.spectra import spectrum_summary
@@ -92,19 +98,26 @@ def spectrum(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     from camdyn.plotting import plot_spectrum
     from camdyn.simulation.runner import simulate
 
-    check_outputs(figure=plot)
+    check_outputs(figure=plot, force=force)
     system = load_source(source, set_)
     ds = simulate(system, speed=speed, revolutions=revolutions, sample_rate=parse_hertz(sample_rate))
     if variable not in ds or ds[variable].dims != ("time",):
         raise ParameterError(f"--variable must be a time series of the result, one of "
                              f"{sorted(k for k in ds.data_vars if ds[k].dims == ('time',))}, got {variable!r}")
     summary = spectrum_summary(ds, variable, window=window, harmonics=harmonics, peaks=peaks)
+    if not json_:
+        _print_spectrum(summary, variable, window)
+    files = []
     if plot is not None:
         plot_spectrum(ds, plot, variable=variable, harmonics=harmonics, revolutions=window,
                       resonances=[p["frequency_hz"] for p in summary["peaks"]])
+        files.append(announce(plot, json_))
     if json_:
-        print_json(summary)
-        return
+        details = {k: summary.pop(k) for k in ("harmonics", "peaks")}
+        emit_json("spectrum", summary, **details, files=files)
+
+
+def _print_spectrum(summary: dict, variable: str, window: int) -> None:
     unit = summary["units"]
     console.print(f"{variable} at {summary['speed_hz']:.4g} Hz, last {window} revolutions "
                   f"(linearized natural frequency {summary['natural_frequency_hz']:.5g} Hz)", highlight=False)
@@ -113,5 +126,3 @@ def spectrum(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                   soft_wrap=True)
     for p in summary["peaks"]:
         console.print(f"peak at {p['frequency_hz']:.5g} Hz: {p['amplitude']:.4g} {unit}", highlight=False)
-    if plot is not None:
-        console.print(f"wrote {plot}", highlight=False)

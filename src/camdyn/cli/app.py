@@ -15,7 +15,9 @@ import warnings
 
 import typer
 
+from camdyn import __version__
 from camdyn.cli import analysis, impact, records, simulate, sweep
+from camdyn.cli.common import compile_notice
 from camdyn.errors import RUNTIME_ERRORS, CamdynError, SweepInterrupted
 
 try:  # recent typer vendors click
@@ -29,21 +31,39 @@ _interrupt = {"signal": signal.SIGINT, "exception": None, "arrived": False}
 
 
 def _interruptible(command):
-    """Register ``command`` so that an interrupt's message survives typer."""
+    """Register ``command`` so that an interrupt's message survives typer, and so that a
+    first compilation of the core is announced (:func:`camdyn.cli.common.compile_notice`)."""
     @functools.wraps(command)
     def wrapper(*args, **kwargs):
         try:
-            return command(*args, **kwargs)
+            with compile_notice():
+                return command(*args, **kwargs)
         except KeyboardInterrupt as exc:
             _interrupt["exception"] = exc
             raise
     return wrapper
 
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="Nonlinear dynamics of cam-follower systems with rolling-sliding contact.")
+app = typer.Typer(add_completion=False, no_args_is_help=True)
 presets_app = typer.Typer(help="List and show bundled parameter presets.", invoke_without_command=True)
 identify_app = typer.Typer(help="Estimate model parameters from measured records.", no_args_is_help=True)
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        typer.echo(f"camdyn {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(version: bool = typer.Option(False, "--version", callback=_print_version, is_eager=True,
+                                       help="Print camdyn's version and exit.")):
+    """Nonlinear dynamics of cam-follower systems with rolling-sliding contact.
+
+    Every file a command writes is announced with its size; an existing file is kept
+    unless --force is given; --json prints one JSON document (docs/cli-json.md).
+    """
+
 
 presets_app.callback()(_interruptible(simulate.presets_list))
 presets_app.command("show")(_interruptible(simulate.presets_show))
@@ -127,7 +147,8 @@ def main(argv=None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except click_exceptions.UsageError as exc:
-        print(f"error: {exc.format_message()}", file=sys.stderr)
+        if exc.format_message():   # no message: the help was printed (no arguments)
+            print(f"error: {exc.format_message()}", file=sys.stderr)
         return 2
     except OSError as exc:
         print(f"error: {exc.strerror or exc}{f' ({exc.filename})' if exc.filename else ''}", file=sys.stderr)

@@ -1,21 +1,37 @@
-"""What every ``camdyn`` command shares: the console, the ``--set`` option, loading a
-system from a preset or TOML file, grid and frequency parsing, JSON printing."""
+"""What every ``camdyn`` command shares: the consoles, the ``--set``, ``--json`` and
+``--force`` options, loading a system from a preset or TOML file, grid and frequency
+parsing, and the notice printed while numba compiles the core for the first time.
+
+Output files and JSON documents are in :mod:`camdyn.cli.outputs`.
+"""
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
+import contextlib
+import sys
 
 import numpy as np
 import typer
 from rich.console import Console
 
-from camdyn.errors import OutputError, ParameterError
+from camdyn.errors import ParameterError
 from camdyn.params.config import load_system, parse_assignments
 from camdyn.params.units import parse_quantity, parse_speed
 
+#: Results and tables (standard output); messages that must not mix with JSON go to ``err_console``.
 console = Console()
-SetOption = typer.Option(None, "--set", "-s", help="Override a parameter: KEY=VALUE, e.g. cam.runout=3.5mm.")
+err_console = Console(stderr=True)
+
+SetOption = typer.Option(None, "--set", "-s", metavar="KEY=VALUE",
+                         help="Override a parameter, e.g. cam.runout=3.5mm (repeat for more).")
+JsonOption = typer.Option(False, "--json", help="Print JSON on standard output (docs/cli-json.md); "
+                                                "messages go to standard error.")
+ForceOption = typer.Option(False, "--force", help="Overwrite output files that already exist.")
+
+COMPILE_NOTICE = "compiling camdyn's core for this machine (first run only, about a minute)..."
+#: Modules whose compiled functions are the core: compiling any of them is the long wait.
+_CORE_MODULES = ("camdyn.integrator.", "camdyn.sweeps.kernel", "camdyn.identification.impact_kernel")
+_notice = {"shown": False}
 
 
 def load_source(source: str, assignments):
@@ -47,32 +63,80 @@ def parse_hertz(text: str) -> float:
         return parse_quantity(text, "Hz", "frequency")
 
 
-def print_json(obj) -> None:
-    typer.echo(json.dumps(obj, indent=2, default=lambda o: o.item() if hasattr(o, "item") else str(o)))
+def say_compiling() -> None:
+    """Print :data:`COMPILE_NOTICE` on standard error, once per process."""
+    if not _notice["shown"]:
+        _notice["shown"] = True
+        print(COMPILE_NOTICE, file=sys.stderr, flush=True)
 
 
+def core_cached(sweeps: bool = False) -> bool:
+    """Whether numba's cache (the package's ``__pycache__`` or ``NUMBA_CACHE_DIR``) holds
+    the compiled integrator for the current source: its cache index lists at least one
+    signature. ``sweeps`` also asks for the sweep kernel. True when it cannot tell."""
+    try:
+        from camdyn.integrator import driver
+        kernels = [driver.integrate]
+        if sweeps:
+            from camdyn.sweeps import kernel
+            kernels.append(kernel.simulate_points)
+        return all(bool(k._cache._cache_file._load_index()) for k in kernels)
+    except Exception:  # noqa: BLE001 - numba's cache internals moved: say nothing
+        return True
 
-def check_outputs(netcdf: Path | None = None, figure: Path | None = None, record: Path | None = None,
-                  json_file: Path | None = None) -> None:
-    """Refuse, before any work, output paths that cannot be written or whose suffix does
-    not match their format: a netCDF result must end in ``.nc`` (or ``.nc4``, ``.h5``), a
-    figure in an image format matplotlib writes, a record in a record format."""
-    from camdyn.io.atomic import check_writable
 
-    if netcdf is not None:
-        if Path(netcdf).suffix.lower() not in (".nc", ".nc4", ".h5", ".hdf5"):
-            raise OutputError(f"cannot write {netcdf}: results are netCDF files, so the name must end in .nc")
-        check_writable(netcdf)
-    if figure is not None:
-        from camdyn.plotting import figure_format
+def notice_if_uncached(sweeps: bool = False) -> None:
+    """Print the compile notice now if the core is not in numba's cache (for work that
+    compiles in worker processes, out of this process's sight)."""
+    if not core_cached(sweeps):
+        say_compiling()
 
-        figure_format(figure)
-        check_writable(figure)
-    if record is not None:
-        from camdyn.io.measurements import RECORD_SUFFIXES
 
-        if Path(record).suffix.lower() not in RECORD_SUFFIXES:
-            raise OutputError(f"cannot write {record}: a record is .csv, .nc/.h5 or .uff/.unv")
-        check_writable(record)
-    if json_file is not None:
-        check_writable(json_file)
+@contextlib.contextmanager
+def compile_notice():
+    """Within the block, print the compile notice when numba starts compiling a core
+    function in this process (a cache miss; loading from the cache is silent)."""
+    try:
+        from numba.core import event
+    except ImportError:  # pragma: no cover
+        yield
+        return
+
+    class _Listener(event.Listener):
+        def on_start(self, ev):
+            function = getattr(ev.data.get("dispatcher"), "py_func", None)
+            if (getattr(function, "__module__", None) or "").startswith(_CORE_MODULES):
+                say_compiling()
+
+        def on_end(self, ev):
+            pass
+
+    listener = _Listener()
+    event.register("numba:compile", listener)
+    try:
+        yield
+    finally:
+        event.unregister("numba:compile", listener)
+
+
+def _show_flags_as_flags() -> None:
+    """typer's rich help prints a type after every option, ``--json <bool>`` for a flag
+    that takes no value; show none for flags, as its plain help does."""
+    try:
+        from typer.core import TyperOption
+    except ImportError:  # pragma: no cover
+        return
+    original = TyperOption.display_type_rich
+    if getattr(original, "_flags_hidden", False):
+        return
+
+    def display_type_rich(self, ctx):
+        if getattr(self, "is_flag", False) or getattr(self, "count", False):
+            return None
+        return original(self, ctx)
+
+    display_type_rich._flags_hidden = True
+    TyperOption.display_type_rich = display_type_rich
+
+
+_show_flags_as_flags()

@@ -9,7 +9,8 @@
    the e/a = 0.25 and 0.30 runs would stay on an impacting motion.
 2. Chapter 3 impact rig (preset ``sundar2014-impact``) at e/rc = 0.2 and 16 Hz:
    periodic impacts and the impact table.
-Figures go to the output folder.
+Figures and results go to the output folder (about 80 MB, most of it the impact rig's
+netCDF result at 204.8 kHz); existing files there are kept unless ``--force``.
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ from rich.table import Table
 
 from camdyn.analysis.harmonics import harmonic_amplitudes
 from camdyn.analysis.kinematics import contact_start, loss_of_contact_speed
+from camdyn.cli.outputs import check_outputs, file_entry, human_size
+from camdyn.io.atomic import check_writable, write_text
 from camdyn.io.netcdf import save_netcdf
 from camdyn.model.equilibrium import static_equilibrium
 from camdyn.params.config import load_system
@@ -37,6 +40,24 @@ TABLE_4_5 = {0.05: (52.5, 1.01), 0.10: (105.0, 4.02), 0.15: (157.5, 9.05), 0.20:
 THESIS_NATURAL_FREQUENCY = 1040.0
 #: The thesis's DC pivot forces (Nx, Ny) [N] at e/a = 0.3, 11.55 Hz (section 4.6).
 THESIS_DC_FORCES = (-2.26, -12.7)
+#: The files the demonstration writes into its folder.
+DEMO_FILES = ("friction_rig.nc", "friction_rig_time.png", "friction_rig_spectrum.png", "impact_rig.nc",
+              "impact_rig_time.png", "friction_record.csv", "contact_conditions.png", "impact_hysteresis.png",
+              "demo.json")
+#: About how much the demonstration writes [B] (most of it ``impact_rig.nc``).
+DEMO_BYTES = 80_000_000
+
+
+def check_demo_outputs(out: Path, force: bool = False) -> None:
+    """Refuse, before any work, a folder that cannot take the demonstration's files: one
+    of them exists (unless ``force``), the folder cannot be written, or its disk lacks
+    :data:`DEMO_BYTES`."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        from camdyn.errors import OutputError
+        raise OutputError(f"cannot write into {out}: it is a file, not a folder")
+    check_outputs(others=[out / name for name in DEMO_FILES], force=force)
+    check_writable(out / DEMO_FILES[0], DEMO_BYTES)
 
 
 def run_demo(out: Path, console: Console | None = None) -> dict:
@@ -44,6 +65,8 @@ def run_demo(out: Path, console: Console | None = None) -> dict:
     console = console or Console()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    console.print(f"the demonstration writes about {human_size(DEMO_BYTES)} into {out}/ (two simulation "
+                  f"results, a record, figures)", markup=False, highlight=False, soft_wrap=True)
     results: dict = {}
 
     friction = load_system("sundar2014-friction")
@@ -105,9 +128,18 @@ def run_demo(out: Path, console: Console | None = None) -> dict:
                              "elapsed_s": ds.attrs["elapsed_s"]}
     results["friction_identification"] = _friction_demo(out, console)
     results["impact_identification"] = _impact_demo(out, console)
-    (out / "demo.json").write_text(json.dumps(results, indent=2))
-    console.print(f"figures and results written to {out}/")
+    write_text(out / "demo.json", json.dumps(results, indent=2))
+    _announce_files(out, console)
     return results
+
+
+def _announce_files(out: Path, console: Console) -> None:
+    """One line: the files written, their sizes and the total."""
+    entries = [file_entry(out / name) for name in DEMO_FILES if (out / name).is_file()]
+    total = sum(e["bytes"] for e in entries)
+    listing = ", ".join(f"{Path(e['path']).name} ({human_size(e['bytes'])})" for e in entries)
+    console.print(f"wrote {len(entries)} files, {human_size(total)} in total, into {out}/: {listing}",
+                  markup=False, highlight=False, soft_wrap=True)
 
 
 def _friction_demo(out: Path, console: Console) -> dict:

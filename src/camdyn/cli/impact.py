@@ -1,6 +1,6 @@
 """CLI commands of the impact studies (thesis chapter 3): ``camdyn identify
 impact-damping`` and ``camdyn identify restitution``, registered on the ``identify``
-group by :mod:`camdyn.cli.records`."""
+group by :mod:`camdyn.cli.app`."""
 
 from __future__ import annotations
 
@@ -11,7 +11,8 @@ from typing import List, Optional
 import typer
 from rich.table import Table
 
-from camdyn.cli.common import SetOption, check_outputs, console, load_source, print_json
+from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, err_console, load_source
+from camdyn.cli.outputs import announce, check_outputs, emit_json
 from camdyn.errors import ParameterError
 from camdyn.params.units import parse_quantity, parse_speed
 
@@ -27,14 +28,26 @@ def _per_record(values: Optional[List[str]], count: int, what: str, parse) -> li
     return out
 
 
+#: Headline keys of the impact-damping estimate (JSON ``summary``); the rest are details,
+#: with the per-impact table last.
+_IMPACT_SUMMARY = ("beta", "beta_units", "n", "mode", "residue", "residue_used", "impacts_used", "records",
+                   "damping_at_peak", "damping_at_peak_units", "peak_penetration", "peak_penetration_units")
+
+
+def _impact_figures(plot_dir: Optional[Path], free: bool) -> list:
+    if plot_dir is None:
+        return []
+    return [Path(plot_dir) / "impact_force.png"] + ([Path(plot_dir) / "residue_landscape.png"] if free else [])
+
+
 def identify_impact_damping(
         source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         data: List[Path] = typer.Argument(..., help="Records (one per operating point): Nx, Ny, alpha_ddot or a_t."),
         set_: Optional[List[str]] = SetOption,
-        speed: Optional[List[str]] = typer.Option(None, help="Cam speed (once, or once per record); default "
-                                                             "from each file's metadata."),
-        runout: Optional[List[str]] = typer.Option(None, help="Cam runout e (once, or per record); default from "
-                                                              "each file's metadata, else the preset's."),
+        speed: Optional[List[str]] = typer.Option(None, metavar="SPEED", help="Cam speed (once, or once per "
+                                                  "record); default from each file's metadata."),
+        runout: Optional[List[str]] = typer.Option(None, metavar="LENGTH", help="Cam runout e (once, or per "
+                                                   "record); default from each file's metadata, else the preset's."),
         fix_n: Optional[float] = typer.Option(None, "--fix-n", help="Fix the exponent n (e.g. 1.5, 1.45; "
                                                                     "0 = viscous)."),
         residue: Optional[str] = typer.Option(None, help="Residue minimised: lambda1, lambda2, lambda3 or combined "
@@ -42,7 +55,8 @@ def identify_impact_damping(
         bootstrap: int = typer.Option(64, help="Bootstrap replicates over impacts (0: none)."),
         plot_dir: Optional[Path] = typer.Option(None, "--plot-dir", help="Write the force, hysteresis and "
                                                                          "residue-landscape figures here."),
-        json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
+        force: bool = ForceOption,
+        json_out: bool = JsonOption):
     """Impact damping beta, n of Fn = K delta^1.5 + beta delta^n delta_dot (thesis 3.5)."""
     from camdyn.identification.impact_damping import (
         estimate_impact_damping,
@@ -50,25 +64,32 @@ def identify_impact_damping(
     )
     from camdyn.io.measurements import read_measurement
 
+    targets = _impact_figures(plot_dir, fix_n is None)
+    check_outputs(figures=targets, force=force)
     system = load_source(source, set_)
     records = [read_measurement(p) for p in data]
     speeds = _per_record(speed, len(records), "speed", lambda s: parse_speed(s))
     runouts = _per_record(runout, len(records), "runout", lambda s: parse_quantity(s, "m", "cam.runout"))
-    with console.status("identifying the impact damping ...") if not json_out else nullcontext():
+    with err_console.status("identifying the impact damping ...") if not json_out else nullcontext():
         est = estimate_impact_damping(system, records, speed=speeds, runout=runouts, exponent=fix_n,
                                       residue=residue, bootstrap=bootstrap)
-    figures = []
-    if plot_dir is not None:
+    if not json_out:
+        _print_impact_table(est)
+    files = []
+    if targets:
         from camdyn.plotting import plot_impact_fit, plot_residue_landscape
-        figures.append(str(plot_impact_fit(est, Path(plot_dir) / "impact_force.png")))
+        files.append(announce(plot_impact_fit(est, targets[0]), json_out))
         if est.mode == "free":
             land = residue_landscape(est, points=15)
-            figures.append(str(plot_residue_landscape(land, est, Path(plot_dir) / "residue_landscape.png")))
+            files.append(announce(plot_residue_landscape(land, est, targets[1]), json_out))
     if json_out:
-        out = est.to_dict()
-        out["figures"] = figures
-        print_json(out)
-        return
+        full = est.to_dict()
+        summary = {k: full.pop(k) for k in _IMPACT_SUMMARY}
+        per_impact = full.pop("per_impact")
+        emit_json("identify-impact-damping", summary, **full, files=files, per_impact=per_impact)
+
+
+def _print_impact_table(est) -> None:
     table = Table("quantity", "value", "95 % bootstrap interval")
     ci = est.confidence
     table.add_row("beta", f"{est.beta:.5g} {est.beta_units}", f"{ci['beta'][0]:.4g} - {ci['beta'][1]:.4g}")
@@ -81,8 +102,6 @@ def identify_impact_damping(
         table.add_row(f"mean |{name}| per impact", f"{value:.3g}", "")
     table.add_row("impacts used", f"{est.impacts_used} from {est.records} record(s)", "")
     console.print(table)
-    for f in figures:
-        console.print(f"figure: {f}")
 
 
 def identify_restitution(
@@ -90,29 +109,32 @@ def identify_restitution(
         data: Path = typer.Argument(..., help="Record with alpha_ddot or a_t (forces not needed)."),
         set_: Optional[List[str]] = SetOption,
         speed: Optional[str] = typer.Option(None, help="Cam speed; default from the file's metadata."),
-        plot: Optional[Path] = typer.Option(None, help="Write the xi against v_a figure here."),
-        json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
+        plot: Optional[Path] = typer.Option(None, help="Write the xi against v_a figure here (.png, .pdf, ...)."),
+        force: bool = ForceOption,
+        json_out: bool = JsonOption):
     """Equivalent restitution xi = 1 - gamma v_a and its Hunt-Crossley damping (thesis 3.8)."""
     from camdyn.identification.restitution import estimate_restitution
     from camdyn.io.measurements import read_measurement
 
-    check_outputs(figure=plot)
+    check_outputs(figure=plot, force=force)
     system = load_source(source, set_)
     est = estimate_restitution(system, read_measurement(data), speed=parse_speed(speed) if speed else None)
+    if not json_out:
+        table = Table("quantity", "value")
+        table.add_row("gamma", f"{est.gamma:.5g} s/m")
+        table.add_row("Hunt-Crossley beta = 1.5 gamma K", f"{est.beta_hunt_crossley:.5g} N*s/m^2.5")
+        table.add_row("Hertz coefficient K", f"{est.stiffness:.5g} N/m^1.5")
+        table.add_row("mean restitution xi", f"{est.mean_restitution:.4g}")
+        table.add_row("mean approach velocity", f"{est.approach_velocity.mean():.4g} m/s")
+        table.add_row("rms misfit of xi", f"{est.residual:.3g}")
+        table.add_row("impacts used", str(est.impacts_used))
+        console.print(table)
+    files = []
     if plot is not None:
         from camdyn.plotting import plot_restitution
         plot_restitution(est, plot)
+        files.append(announce(plot, json_out))
     if json_out:
-        print_json(est.to_dict())
-        return
-    table = Table("quantity", "value")
-    table.add_row("gamma", f"{est.gamma:.5g} s/m")
-    table.add_row("Hunt-Crossley beta = 1.5 gamma K", f"{est.beta_hunt_crossley:.5g} N*s/m^2.5")
-    table.add_row("Hertz coefficient K", f"{est.stiffness:.5g} N/m^1.5")
-    table.add_row("mean restitution xi", f"{est.mean_restitution:.4g}")
-    table.add_row("mean approach velocity", f"{est.approach_velocity.mean():.4g} m/s")
-    table.add_row("rms misfit of xi", f"{est.residual:.3g}")
-    table.add_row("impacts used", str(est.impacts_used))
-    console.print(table)
-    if plot is not None:
-        console.print(f"figure: {plot}")
+        full = est.to_dict()
+        per_impact = full.pop("per_impact")
+        emit_json("identify-restitution", full, files=files, per_impact=per_impact)

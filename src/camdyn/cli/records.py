@@ -14,14 +14,15 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
 from camdyn.cli.common import (
+    ForceOption,
+    JsonOption,
     SetOption,
-    check_outputs,
     console,
     load_source,
     parse_grid,
     parse_hertz,
-    print_json,
 )
+from camdyn.cli.outputs import announce, check_outputs, emit_json
 from camdyn.errors import ParameterError
 from camdyn.params.units import parse_quantity, parse_speed
 
@@ -39,13 +40,14 @@ def synthesize(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                    None, "--restitution-gamma", help="Simulate instantaneous impacts xi = 1 - gamma v_a "
                                                      "(simulation S3) with this gamma, e.g. 0.8s/m; "
                                                      "records alpha_ddot only."),
-               out: Path = typer.Option(..., help="Output file: .csv, .nc or .uff.")):
+               out: Path = typer.Option(..., help="Output file: .csv, .nc or .uff."),
+               force: bool = ForceOption):
     """Simulate a measurement record (steady state, optional noise) and write it."""
     from camdyn.io.measurements import write_measurement
     from camdyn.records.synthesis import synthesize as make
     from camdyn.records.synthesis import synthesize_impact_map
 
-    check_outputs(record=out)
+    check_outputs(record=out, force=force)
     system = load_source(source, set_)
     rate = parse_hertz(sample_rate)
     if restitution_gamma is not None:
@@ -56,25 +58,30 @@ def synthesize(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         rec = make(system, parse_speed(speed) if speed else None, revolutions=revolutions, sample_rate=rate,
                    noise=noise, settle=settle, seed=seed, channels=tuple(c.strip() for c in channels.split(",")))
     path = write_measurement(rec, out)
-    console.print(f"wrote {path} ({rec.sizes['time']} samples at {rate:g} Hz, "
-                  f"{revolutions:g} revolutions at {rec.attrs['speed_hz']:g} Hz, noise {noise:g})")
+    announce(path, detail=f": {rec.sizes['time']} samples at {rate:g} Hz, {revolutions:g} revolutions at "
+                          f"{rec.attrs['speed_hz']:g} Hz, noise {noise:g}")
 
 
 def synthesize_impulse(damping: float = typer.Option(0.02, help="Damping ratio of the lower mode [-]."),
                        duration: float = typer.Option(1.0, help="Record length [s]."),
                        sample_rate: str = typer.Option("20kHz", "--sample-rate"),
                        noise: float = typer.Option(0.0, help="Noise fraction of each channel's rms."),
-                       out: Path = typer.Option(..., help="Output file: .csv, .nc or .uff.")):
+                       out: Path = typer.Option(..., help="Output file: .csv, .nc or .uff."),
+                       force: bool = ForceOption):
     """Write a synthetic two-mass impulse test (force, acceleration) with a known damping ratio."""
     from camdyn.identification.modal import synthesize_impulse_test
     from camdyn.io.measurements import write_measurement
 
-    check_outputs(record=out)
+    check_outputs(record=out, force=force)
     rec = synthesize_impulse_test(damping_ratios=(damping, 0.02), duration=duration,
                                   sample_rate=parse_hertz(sample_rate), noise=noise)
     write_measurement(rec, out)
     fn = ", ".join(f"{f:.1f}" for f in rec.attrs["natural_frequencies"])
-    console.print(f"wrote {out}: modes at {fn} Hz, lower-mode damping {100 * damping:g} %")
+    announce(out, detail=f": modes at {fn} Hz, lower-mode damping {100 * damping:g} %")
+
+
+#: Keys of the friction estimate that are details, not headline numbers (JSON).
+_FRICTION_DETAILS = ("sliding_sign", "amplitudes", "checks")
 
 
 def identify_friction(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
@@ -84,7 +91,7 @@ def identify_friction(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"
                       speed: Optional[str] = typer.Option(None, help="Cam speed; default from the file or estimated."),
                       harmonics: int = typer.Option(20, help="Cam harmonics per signal in the force balance "
                                                              "(1 = the thesis's truncation)."),
-                      json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
+                      json_out: bool = JsonOption):
     """Coefficient of friction from pivot forces and acceleration (thesis 4.6)."""
     from camdyn.identification.friction import estimate_friction
     from camdyn.io.measurements import read_measurement
@@ -93,7 +100,9 @@ def identify_friction(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"
     rec = read_measurement(data)
     est = estimate_friction(system, rec, speed=parse_speed(speed) if speed else None, harmonics=harmonics)
     if json_out:
-        print_json(est.to_dict())
+        full = est.to_dict()
+        details = {k: full.pop(k) for k in _FRICTION_DETAILS}
+        emit_json("identify-friction", full, **details)
         return
     table = Table("quantity", "value")
     table.add_row("coefficient of friction mu", f"{est.mu:.5g}")
@@ -110,13 +119,14 @@ def identify_friction(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"
 
 def identify_modal(data: Path = typer.Argument(..., help="Impulse test: force [N] and acceleration [m/s^2]."),
                    band: Optional[str] = typer.Option(None, help="Search band, e.g. 700:1200 (Hz)."),
-                   plot: Optional[Path] = typer.Option(None, help="Write the accelerance plot (PNG)."),
-                   json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
+                   plot: Optional[Path] = typer.Option(None, help="Write the accelerance plot (.png, .pdf, ...)."),
+                   force: bool = ForceOption,
+                   json_out: bool = JsonOption):
     """Modal damping ratio by the half-power bandwidth of the accelerance peak (thesis 4.5.2)."""
     from camdyn.identification.modal import accelerance, half_power_damping
     from camdyn.io.measurements import read_measurement
 
-    check_outputs(figure=plot)
+    check_outputs(figure=plot, force=force)
     rec = read_measurement(data)
     freq, h = accelerance(rec)
     limits = None
@@ -126,15 +136,20 @@ def identify_modal(data: Path = typer.Argument(..., help="Impulse test: force [N
             raise ParameterError(f"--band: expected LOW:HIGH in Hz, got {band!r}")
         limits = (parse_hertz(parts[0]), parse_hertz(parts[1]))
     est = half_power_damping(freq, h, limits)
+    if not json_out:
+        console.print(f"natural frequency {est.natural_frequency:.2f} Hz, damping ratio "
+                      f"{100 * est.damping_ratio:.3f} % (half-power band {est.lower:.2f}-{est.upper:.2f} Hz, "
+                      f"{est.lines} lines)")
+    files = []
     if plot:
         from camdyn.plotting import plot_accelerance
         plot_accelerance(freq, h, est, plot)
+        files.append(announce(plot, json_out))
     if json_out:
-        print_json(est.to_dict())
-        return
-    console.print(f"natural frequency {est.natural_frequency:.2f} Hz, damping ratio "
-                  f"{100 * est.damping_ratio:.3f} % (half-power band {est.lower:.2f}-{est.upper:.2f} Hz, "
-                  f"{est.lines} lines)")
+        full = est.to_dict()
+        emit_json("identify-modal-damping", {k: full[k] for k in ("natural_frequency", "damping_ratio", "lower",
+                                                                  "upper")},
+                  peak=full["peak"], lines=full["lines"], resolution=full["resolution"], files=files)
 
 
 def tribology(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
@@ -142,12 +157,13 @@ def tribology(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
               speed: Optional[str] = typer.Option(None, help="Cam speed, e.g. 11.55Hz."),
               lubricant: str = typer.Option("agma-4ep", help="Lubricant: agma-4ep, iso-32, or none."),
               finish: str = typer.Option("ground", help="Surface finish: ground or sand-blasted."),
-              plot: Optional[Path] = typer.Option(None, help="Write the contact-conditions plot (PNG)."),
-              json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
+              plot: Optional[Path] = typer.Option(None, help="Write the contact-conditions plot (.png, .pdf, ...)."),
+              force: bool = ForceOption,
+              json_out: bool = JsonOption):
     """Hertz pressure, velocities, slide-to-roll ratio, film thickness and lubrication regime."""
     from camdyn.tribology import contact_conditions, lubrication_regime
 
-    check_outputs(figure=plot)
+    check_outputs(figure=plot, force=force)
     system = load_source(source, set_)
     ds = contact_conditions(system, parse_speed(speed) if speed else None,
                             None if lubricant == "none" else lubricant, finish)
@@ -158,25 +174,29 @@ def tribology(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
             ("sliding_velocity", "m/s", 1, "m/s"), ("sum_velocity", "m/s", 1, "m/s"), ("slide_to_roll", "1", 1, "-")]
     if "film_thickness" in ds:
         rows += [("film_thickness", "m", 1e6, "um"), ("lambda_ratio", "1", 1, "-")]
-    out = {name: {"min": float(np.nanmin(ds[name].values)), "max": float(np.nanmax(ds[name].values)),
-                  "mean": float(np.nanmean(ds[name].values)), "units": unit} for name, unit, _, _ in rows}
-    if "lambda_ratio" in ds:
-        out["regime"] = str(lubrication_regime(out["lambda_ratio"]["min"]))
-        out["lubricant"] = ds.attrs["lubricant"]
-    out["speed_hz"] = float(ds.attrs["speed_hz"])
+    quantities = {name: {"min": float(np.nanmin(ds[name].values)), "mean": float(np.nanmean(ds[name].values)),
+                         "max": float(np.nanmax(ds[name].values)), "units": unit} for name, unit, _, _ in rows}
+    lam = quantities.get("lambda_ratio", {}).get("min")
+    summary = {"speed_hz": float(ds.attrs["speed_hz"]),
+               "lubricant": ds.attrs.get("lubricant") if lam is not None else None, "finish": finish,
+               "regime": str(lubrication_regime(lam)) if lam is not None else None, "lambda_ratio_min": lam,
+               "peak_pressure_max_Pa": quantities["peak_pressure"]["max"]}
+    if not json_out:
+        table = Table("quantity", "min", "mean", "max", "unit")
+        for name, _, scale, shown in rows:
+            v = quantities[name]
+            table.add_row(name, *(f"{v[k] * scale:.4g}" for k in ("min", "mean", "max")), shown)
+        console.print(table)
+        if summary["regime"]:
+            console.print(f"lubrication regime at the thinnest film: {summary['regime']} ({summary['lubricant']}, "
+                          f"{finish})")
+    files = []
     if plot:
         from camdyn.plotting import plot_contact_conditions
         plot_contact_conditions(ds, plot)
+        files.append(announce(plot, json_out))
     if json_out:
-        print_json(out)
-        return
-    table = Table("quantity", "min", "mean", "max", "unit")
-    for name, _, scale, shown in rows:
-        v = out[name]
-        table.add_row(name, *(f"{v[k] * scale:.4g}" for k in ("min", "mean", "max")), shown)
-    console.print(table)
-    if "regime" in out:
-        console.print(f"lubrication regime at the thinnest film: {out['regime']} ({out['lubricant']}, {finish})")
+        emit_json("tribology", summary, quantities=quantities, files=files)
 
 
 def design(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
@@ -188,14 +208,17 @@ def design(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
            finish: str = typer.Option("ground", help="Surface finish for the lambda ratio."),
            regime: Optional[str] = typer.Option(None, help="Required regime: boundary, mixed or EHL."),
            harmonic_margin: float = typer.Option(0.2, help="Largest 5 f_cam / f_n."),
-           out: Optional[Path] = typer.Option(None, help="Write the map as netCDF."),
-           plot: Path = typer.Option(Path("design.png"), help="Write the map figure (PNG)."),
-           json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
+           out: Optional[Path] = typer.Option(None, help="Write the map as netCDF (.nc)."),
+           plot: Optional[Path] = typer.Option(None, help="Write the map figure (.png, .pdf, ...); default "
+                                                          "design.png, none with --json."),
+           force: bool = ForceOption,
+           json_out: bool = JsonOption):
     """Map the design criteria of the friction experiment and recommend an operating window (thesis 4.4)."""
-    from camdyn.plotting import plot_design_map
     from camdyn.tribology.design import design_map
 
-    check_outputs(netcdf=out, figure=plot)
+    if plot is None and not json_out:
+        plot = Path("design.png")
+    check_outputs(netcdf=out, figure=plot, force=force)
     system = load_source(source, set_)
     grid_r = parse_grid(ratios, "ratios")
     grid_s = parse_grid(speeds, "speeds", "Hz")
@@ -205,32 +228,46 @@ def design(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         task = bar.add_task("map", total=grid_r.size * grid_s.size)
         ds = design_map(system, axis, grid_r, grid_s, lubricant=lubricant, roughness=finish, regime=regime,
                         harmonic_margin=harmonic_margin, progress=lambda d, t: bar.update(task, completed=d))
-    if out:
-        from camdyn.io.netcdf import save_netcdf
-        stored = ds.copy()
-        for name in [k for k in ds.data_vars if ds[k].dtype == bool]:
-            stored[name] = ds[name].astype("int8")
-        save_netcdf(stored, out)
-    plot_design_map(ds, plot)
     adm = ds["admissible"].values
     window = {}
     for i, r in enumerate(ds["ratio"].values):
         ok = ds["speed"].values[adm[i]]
         if ok.size:
             window[f"{r:.4g}"] = [float(ok.min()), float(ok.max())]
-    result = {"axis": axis, "recommended_ratio": ds.attrs["recommended_ratio"],
-              "recommended_speed_hz": ds.attrs["recommended_speed"], "admissible_speeds_hz": window,
-              "admissible_points": int(adm.sum()), "points": int(adm.size), "figure": str(plot)}
+    summary = {"axis": axis, "recommended_ratio": ds.attrs["recommended_ratio"],
+               "recommended_speed_hz": ds.attrs["recommended_speed"], "admissible_points": int(adm.sum()),
+               "points": int(adm.size)}
+    if not json_out:
+        _print_design(ds, window, summary)
+    files = _write_design(ds, out, plot, json_out)
     if json_out:
-        print_json(result)
-        return
+        emit_json("design", summary, admissible_speeds_hz=window, files=files)
+
+
+def _print_design(ds, window: dict, summary: dict) -> None:
     table = Table(ds["ratio"].attrs["long_name"], "admissible speeds [Hz]")
     for r, (lo, hi) in window.items():
         table.add_row(r, f"{lo:.3g} - {hi:.3g}")
     console.print(table)
-    if math.isfinite(result["recommended_ratio"]):
-        console.print(f"recommended: {ds['ratio'].attrs['long_name']} = {result['recommended_ratio']:.4g} at "
-                      f"{result['recommended_speed_hz']:.4g} Hz (strongest first harmonic with a contact margin)")
+    if math.isfinite(summary["recommended_ratio"]):
+        console.print(f"recommended: {ds['ratio'].attrs['long_name']} = {summary['recommended_ratio']:.4g} at "
+                      f"{summary['recommended_speed_hz']:.4g} Hz (strongest first harmonic with a contact margin)")
     else:
         console.print("no grid point meets every criterion")
-    console.print(f"figure: {plot}")
+
+
+def _write_design(ds, out: Optional[Path], plot: Optional[Path], json_out: bool) -> list:
+    """Write the design map's netCDF and figure, as asked; return their file entries."""
+    files = []
+    if out:
+        from camdyn.io.netcdf import save_netcdf
+        stored = ds.copy()
+        for name in [k for k in ds.data_vars if ds[k].dtype == bool]:
+            stored[name] = ds[name].astype("int8")
+        save_netcdf(stored, out)
+        files.append(announce(out, json_out))
+    if plot:
+        from camdyn.plotting import plot_design_map
+        plot_design_map(ds, plot)
+        files.append(announce(plot, json_out))
+    return files

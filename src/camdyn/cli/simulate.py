@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import List, Optional
@@ -10,7 +9,8 @@ from typing import List, Optional
 import typer
 from rich.table import Table
 
-from camdyn.cli.common import SetOption, check_outputs, console, load_source
+from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, load_source
+from camdyn.cli.outputs import announce, check_outputs, emit_json
 from camdyn.params.config import (
     SCHEMA,
     list_presets,
@@ -47,7 +47,7 @@ def presets_keys():
 
 def equilibrium(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                 set_: Optional[List[str]] = SetOption,
-                json_out: bool = typer.Option(False, "--json", help="Print JSON.")):
+                json_out: bool = JsonOption):
     """Static equilibrium angle, contact force and linearized natural frequency."""
     from camdyn.model.equilibrium import static_equilibrium
     system = load_source(source, set_)
@@ -60,7 +60,7 @@ def equilibrium(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         "rotational_stiffness_N_m_per_rad": eq.stiffness,
     }
     if json_out:
-        typer.echo(json.dumps(out, indent=2))
+        emit_json("equilibrium", {"preset": system.name, **out})
         return
     table = Table("quantity", "value", title=f"static equilibrium of {system.name}")
     table.add_row("follower angle alpha*", f"{out['angle_deg']:.5f} deg")
@@ -88,7 +88,9 @@ def _summary(ds) -> dict:
         "impacts": int(ds.sizes.get("impact", 0)),
         "impacts_per_revolution": int(ds.sizes.get("impact", 0)) / revs if revs else 0.0,
         "elapsed_s": ds.attrs["elapsed_s"],
+        "alpha_ddot_harmonic1_rad_s2": None, "alpha_ddot_harmonic2_rad_s2": None,
         "solver": {k[7:]: v for k, v in ds.attrs.items() if k.startswith("solver_")},
+        "last_impact": None,
     }
     if revs >= 4 and speed > 0:
         n = max(1, int(min(10, revs // 2)))
@@ -115,10 +117,10 @@ def _print_summary(out: dict):
     table.add_row("normal force Fn", f"{out['Fn_min_N']:.4g} to {out['Fn_max_N']:.4g} N")
     table.add_row("time in contact", f"{100 * out['contact_fraction']:.1f} %")
     table.add_row("impacts", f"{out['impacts']} ({out['impacts_per_revolution']:.3g} per revolution)")
-    if "alpha_ddot_harmonic1_rad_s2" in out:
+    if out["alpha_ddot_harmonic1_rad_s2"] is not None:
         table.add_row("alpha_ddot, 1st cam harmonic", f"{out['alpha_ddot_harmonic1_rad_s2']:.4g} rad/s^2")
         table.add_row("alpha_ddot, 2nd cam harmonic", f"{out['alpha_ddot_harmonic2_rad_s2']:.4g} rad/s^2")
-    if "last_impact" in out:
+    if out["last_impact"] is not None:
         li = out["last_impact"]
         table.add_row("last impact: approach / separation",
                       f"{li['approach_velocity_m_s']:.4g} / {li['separation_velocity_m_s']:.4g} m/s")
@@ -130,43 +132,49 @@ def _print_summary(out: dict):
     console.print(table)
 
 
+#: Keys of the simulate summary that are details, not headline numbers (JSON).
+_DETAILS = ("last_impact", "solver")
+
+
 def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              set_: Optional[List[str]] = SetOption,
              speed: Optional[str] = typer.Option(None, help="Cam speed, e.g. 11.55Hz or 693rpm."),
              revolutions: float = typer.Option(30.0, help="Number of cam revolutions."),
              sample_rate: str = typer.Option("20kHz", help="Output sampling rate."),
-             out: Optional[Path] = typer.Option(None, help="Write the results to this netCDF file."),
-             plot: Optional[Path] = typer.Option(None, help="Write a time-history figure (PNG)."),
+             out: Optional[Path] = typer.Option(None, help="Write the results to this netCDF file (.nc)."),
+             plot: Optional[Path] = typer.Option(None, help="Write a time-history figure (.png, .pdf, .svg, ...)."),
              method: str = typer.Option("auto", help="auto, explicit or rosenbrock."),
              rtol: float = typer.Option(1e-8, help="Relative tolerance."),
-             json_out: bool = typer.Option(False, "--json", help="Print a JSON summary.")):
+             force: bool = ForceOption,
+             json_out: bool = JsonOption):
     """Simulate the follower and summarise the response."""
     from camdyn.simulation.runner import simulate as run
-    check_outputs(netcdf=out, figure=plot)
+    check_outputs(netcdf=out, figure=plot, force=force)
     system = load_source(source, set_)
     fs = parse_quantity(sample_rate, "Hz", "--sample-rate")
     if speed is not None:
         speed = parse_speed(speed, "--speed")
     ds = run(system, speed=speed, revolutions=revolutions, sample_rate=fs, method=method, rtol=rtol)
     summary = _summary(ds)
+    if not json_out:
+        _print_summary(summary)
+    files = []
     if out is not None:
         from camdyn.io.netcdf import save_netcdf
         save_netcdf(ds, out)
-        summary["netcdf"] = str(out)
+        files.append(announce(out, json_out))
     if plot is not None:
         from camdyn.plotting import plot_time_history
         plot_time_history(ds, plot)
-        summary["figure"] = str(plot)
+        files.append(announce(plot, json_out))
     if json_out:
-        typer.echo(json.dumps(summary, indent=2))
-    else:
-        _print_summary(summary)
-        for key in ("netcdf", "figure"):
-            if key in summary:
-                console.print(f"wrote {summary[key]}")
+        emit_json("simulate", {k: v for k, v in summary.items() if k not in _DETAILS},
+                  last_impact=summary["last_impact"], solver=summary["solver"], files=files)
 
 
-def demo(out: Path = typer.Option(Path("out"), help="Folder for the figures and results.")):
+def demo(out: Path = typer.Option(Path("out"), help="Folder for the figures and results (about 80 MB)."),
+         force: bool = ForceOption):
     """Run the demonstration on the bundled presets: print key results, write figures."""
-    from camdyn.cli.demo import run_demo
+    from camdyn.cli.demo import check_demo_outputs, run_demo
+    check_demo_outputs(out, force)
     run_demo(out, console)

@@ -8,7 +8,8 @@ from typing import List, Optional
 
 import typer
 
-from camdyn.cli.common import SetOption, check_outputs, console, parse_grid
+from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, notice_if_uncached, parse_grid
+from camdyn.cli.outputs import announce, check_outputs, emit_json
 from camdyn.sweeps.metrics import REGIMES
 
 
@@ -18,13 +19,20 @@ def sweep(spec_path: Path = typer.Argument(..., metavar="SPEC.toml", help="Sweep
           dask: Optional[str] = typer.Option(None, help="'local' for a Dask LocalCluster, or a scheduler address "
                                                         "tcp://HOST:PORT."),
           threads: int = typer.Option(1, help="Numba threads per worker (prange over the points of a chunk)."),
-          out: Optional[Path] = typer.Option(None, help="Result file (.nc); default [output] path of the spec."),
-          restart: bool = typer.Option(False, help="Discard this output's checkpoints instead of resuming."),
+          out: Optional[Path] = typer.Option(None, help="Result file (.nc); default the spec's \\[output] path, "
+                                                        "relative to the working directory."),
+          restart: bool = typer.Option(False, "--restart", help="Discard this output's checkpoints instead of "
+                                                                "resuming."),
           keep_parts: bool = typer.Option(False, "--keep-parts", help="Keep the per-chunk checkpoint files."),
           plot: Optional[Path] = typer.Option(None, help="Figure path (default: the result's name with .png)."),
           no_plot: bool = typer.Option(False, "--no-plot", help="Write no figure."),
-          quiet: bool = typer.Option(False, help="No progress bar.")):
-    """Run a parameter sweep; resume it from its checkpoints if it was interrupted."""
+          force: bool = typer.Option(False, "--force", help="Overwrite an existing result and figure (checkpoints "
+                                                            "are resumed, or discarded with --restart)."),
+          quiet: bool = typer.Option(False, "--quiet", help="No progress bar.")):
+    """Run a parameter sweep; resume it from its checkpoints if it was interrupted.
+
+    A relative result path in the spec (its output table) is taken relative to the
+    working directory, not to the spec's folder."""
     import dataclasses
 
     from camdyn.plotting import plot_sweep
@@ -33,20 +41,24 @@ def sweep(spec_path: Path = typer.Argument(..., metavar="SPEC.toml", help="Sweep
     spec = load_spec(spec_path)
     if out is not None:
         spec = dataclasses.replace(spec, output=out)
-    check_outputs(netcdf=spec.output, figure=None if no_plot else plot or spec.output.with_suffix(".png"))
+    figure = None if no_plot else plot or spec.output.with_suffix(".png")
+    check_outputs(netcdf=spec.output, figure=figure, force=force)
+    notice_if_uncached(sweeps=True)
     ds = run_sweep(spec, workers=workers, dask=dask, threads=threads, progress=not quiet, restart=restart,
-                   keep_parts=keep_parts, echo=lambda msg: console.print(msg, highlight=False, soft_wrap=True))
+                   keep_parts=keep_parts, echo=_echo)
     failed = int((ds["status"] != 0).sum())
-    console.print(f"wrote {spec.output} ({spec.points} points, {failed} failed)", highlight=False, soft_wrap=True)
+    announce(spec.output, detail=f": {spec.points} points, {failed} failed")
     if failed:
         reasons = sorted(set(str(r) for r in ds["failure"].values.ravel() if str(r)))
         for reason in reasons[:5]:
             console.print(f"  failed: {reason}", highlight=False, soft_wrap=True)
-    if not no_plot:
-        figure = plot or spec.output.with_suffix(".png")
-        plot_sweep(ds, figure)
-        console.print(f"wrote {figure}", highlight=False, soft_wrap=True)
+    if figure is not None:
+        announce(plot_sweep(ds, figure))
     ds.close()
+
+
+def _echo(message: str) -> None:
+    console.print(message, markup=False, highlight=False, soft_wrap=True)
 
 
 def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
@@ -59,15 +71,16 @@ def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                 plot: Optional[Path] = typer.Option(None, help="Figure (default: the result's name with .png)."),
                 workers: Optional[int] = typer.Option(None, help="Worker processes (default every core)."),
                 dask: Optional[str] = typer.Option(None, help="'local' or a scheduler address tcp://HOST:PORT."),
-                restart: bool = typer.Option(False, help="Discard checkpoints instead of resuming."),
-                quiet: bool = typer.Option(False, help="No progress bar.")):
+                restart: bool = typer.Option(False, "--restart", help="Discard checkpoints instead of resuming."),
+                force: bool = ForceOption,
+                quiet: bool = typer.Option(False, "--quiet", help="No progress bar.")):
     """Bifurcation diagram over cam speed: Poincare samples once per revolution, impacts per
     revolution, period and regime (a sweep; see 'camdyn sweep' for the general form)."""
     from camdyn.params.config import parse_assignments
     from camdyn.plotting import plot_sweep
     from camdyn.sweeps import run_sweep, spec_from_dict
 
-    check_outputs(netcdf=out, figure=plot or out.with_suffix(".png"))
+    check_outputs(netcdf=out, figure=plot or out.with_suffix(".png"), force=force)
     grid = parse_grid(speeds, "--speeds", "Hz")
     table = {"system": {"source": source, "set": parse_assignments(set_)},
              "vary": [{"key": "motion.speed", "values": [float(v) for v in grid]}],
@@ -75,12 +88,12 @@ def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              "metrics": {"names": ["poincare", "impacts", "regime", "residual", "max_force"]},
              "output": {"path": str(out)}}
     spec = spec_from_dict(table, name=out.stem)
-    ds = run_sweep(spec, workers=workers, dask=dask, progress=not quiet, restart=restart,
-                   echo=lambda msg: console.print(msg, highlight=False, soft_wrap=True))
-    figure = plot_sweep(ds, plot or out.with_suffix(".png"))
+    notice_if_uncached(sweeps=True)
+    ds = run_sweep(spec, workers=workers, dask=dask, progress=not quiet, restart=restart, echo=_echo)
+    announce(out)
+    announce(plot_sweep(ds, plot or out.with_suffix(".png")))
     counts = {name: int((ds.regime == code).sum()) for code, name in REGIMES.items()}
-    console.print(f"wrote {out} and {figure}; regimes: " + ", ".join(f"{k} {v}" for k, v in counts.items() if v),
-                  highlight=False, soft_wrap=True)
+    _echo("regimes: " + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
     ds.close()
 
 
@@ -89,20 +102,20 @@ def lyapunov(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              speed: str = typer.Option(..., help="Cam speed, e.g. 18Hz or 1080rpm."),
              revolutions: int = typer.Option(400, help="Cam periods averaged."),
              transient: int = typer.Option(200, help="Cam periods dropped first."),
-             json_: bool = typer.Option(False, "--json", help="Print JSON.")):
+             json_: bool = JsonOption):
     """Largest Lyapunov exponent of the steady motion at one speed (two nearby trajectories
     through every impact, renormalised once per revolution)."""
     from camdyn.analysis.chaos import lyapunov_exponent
-    from camdyn.cli.common import load_source, print_json
+    from camdyn.cli.common import load_source
     from camdyn.params.units import parse_speed
 
     result = lyapunov_exponent(load_source(source, set_), speed=parse_speed(speed), revolutions=revolutions,
                                transient=transient)
     half = result.running[revolutions // 2 - 1] if revolutions >= 2 else float("nan")
     if json_:
-        print_json({"speed_hz": result.speed, "exponent_per_s": result.exponent,
-                     "per_revolution": result.per_revolution, "exponent_half_record_per_s": float(half),
-                     "revolutions": revolutions, "transient": transient})
+        emit_json("lyapunov", {"speed_hz": result.speed, "exponent_per_s": result.exponent,
+                               "per_revolution": result.per_revolution, "chaotic": bool(result.exponent > 0)},
+                  exponent_half_record_per_s=float(half), revolutions=revolutions, transient=transient)
         return
     verdict = "chaotic" if result.exponent > 0 else "not chaotic (attracting)"
     console.print(f"largest Lyapunov exponent at {result.speed:g} Hz: {result.exponent:.4g} 1/s "

@@ -2,16 +2,16 @@
 
 A record is an :class:`xarray.Dataset` over ``time`` [s] with any of the channels
 
-============== ========= ==============================================================
-channel         unit      meaning
-============== ========= ==============================================================
-``Nx``          N         pivot reaction on the follower, horizontal
-``Ny``          N         pivot reaction on the follower, vertical
-``alpha_ddot``  rad/s^2   follower angular acceleration
-``a_t``         m/s^2     tangential accelerometer signal at the sensor distance ``l_a``
-``force``       N         impulse-hammer force (impulse tests)
-``acceleration`` m/s^2    response acceleration (impulse tests)
-============== ========= ==============================================================
+================ ========= ==============================================================
+channel          unit      meaning
+================ ========= ==============================================================
+``Nx``           N         pivot reaction on the follower, horizontal
+``Ny``           N         pivot reaction on the follower, vertical
+``alpha_ddot``   rad/s^2   follower angular acceleration
+``a_t``          m/s^2     tangential accelerometer signal at the sensor distance ``l_a``
+``force``        N         impulse-hammer force (impulse tests)
+``acceleration`` m/s^2     response acceleration (impulse tests)
+================ ========= ==============================================================
 
 and optional metadata attributes (``speed_hz`` [Hz], ``runout`` [m], ``preset``). A record
 holding ``a_t`` but not ``alpha_ddot`` gets ``alpha_ddot = a_t / l_a`` from

@@ -29,7 +29,11 @@ A spec is a TOML file (or the same tables as a dict)::
     harmonics = 10                        # cam harmonics of alpha_ddot kept by "spectrum"
 
     [output]
-    path = "bifurcation.nc"
+    path = "bifurcation.nc"               # relative to the working directory, or absolute
+
+A relative ``[system] source`` TOML path is taken relative to the spec's folder; a
+relative ``[output] path`` relative to the current working directory (the result goes
+where the command runs, never beside a spec in the package's or the examples' folders).
 
 Every value is checked, and every point's varied values are applied one parameter at a
 time to the base system, before any simulation starts (:func:`load_spec`), so a bad
@@ -86,8 +90,8 @@ class Vary:
     """One varied parameter: dotted ``key``, its ``values`` in SI units along ``dimension``.
 
     ``unit`` is the SI unit of ``values``; ``display_unit`` the unit the spec wrote them in
-    (``"mm"``, ``"rpm"``; the SI unit when it wrote bare numbers) and ``display_factor``
-    the display value of one SI unit (1000 for mm), for figures only.
+    (``"mm"``, ``"rpm"``; empty for bare numbers) and ``display_factor`` the display value
+    of one SI unit (1000 for mm), for figures only.
     """
 
     key: str
@@ -99,8 +103,8 @@ class Vary:
 
     def display_attrs(self) -> dict:
         """Attributes of the result's coordinate that name the display unit (empty when
-        the display unit is the SI unit)."""
-        if not self.display_unit or self.display_unit == self.unit:
+        the spec wrote bare numbers)."""
+        if not self.display_unit:
             return {}
         return {"display_units": self.display_unit, "display_factor": self.display_factor}
 
@@ -267,11 +271,11 @@ _LEADING_NUMBER = re.compile(r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*"
 
 def _display_unit(key: str, raw, si_unit: str) -> tuple[str, float]:
     """The unit a swept value was written in (``"3.5 mm"`` -> ``"mm"``) and the display
-    value of one SI unit (1000); the SI unit and 1 for bare numbers and for units with an
-    offset (degC)."""
+    value of one SI unit (1000); ``("", 1.0)`` for bare numbers, and the SI unit for units
+    with an offset (degC)."""
     text = _LEADING_NUMBER.sub("", raw, count=1).strip() if isinstance(raw, str) else ""
     if not text or text == si_unit:
-        return si_unit, 1.0
+        return text, 1.0
     try:
         one, zero = (float(convert_value(key, f"{x} {text}", {})) for x in (1, 0))
     except CamdynError:
@@ -353,9 +357,7 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
         raise ParameterError(f"sweep spec: {harmonics} harmonics need samples_per_revolution > {2 * harmonics}")
 
     out = _table(spec, "output", {"path"})
-    path = Path(str(out.get("path", f"{name}.nc")))
-    if not path.is_absolute():
-        path = base_dir / path
+    path = Path(str(out.get("path", f"{name}.nc")))   # a relative path: the working directory's
     if path.suffix not in (".nc", ".h5"):
         raise ParameterError(f"sweep spec: [output] path must end in .nc (netCDF4/HDF5), got {path.name!r}")
     _check_result_size(points, names, harmonics, revolutions - discard, path)

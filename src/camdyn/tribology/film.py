@@ -132,7 +132,9 @@ def hamrock_dowson_film(load, entrainment_velocity, radius_x, radius_y, reduced_
 
 
 def pan_hamrock_film(load, entrainment_velocity, radius, length, reduced_modulus, lubricant: Lubricant):
-    """Minimum film thickness of a line contact [m] (Pan and Hamrock 1989)::
+    """Minimum film thickness of a line contact [m] (Pan and Hamrock 1989).
+
+    ::
 
         h_min / R = 1.714 W'^-0.128 U^0.694 G^0.568,  W' = w / (E' R l)
     """

@@ -1,0 +1,137 @@
+"""What the commands write: output paths checked before any work, each written file
+announced with its size, and JSON documents in the shape docs/cli-json.md describes.
+
+Rules every command follows:
+
+* an output goes where the user says, or to the working directory;
+* its format follows its suffix, or it is refused: a result ``.nc`` (netCDF), a figure
+  any image format matplotlib writes, a record ``.csv``, ``.nc`` or ``.uff``;
+* an existing file is not overwritten without ``--force``;
+* every written file is announced as ``wrote PATH (SIZE)``: on standard output, or on
+  standard error with ``--json`` so that standard output stays one JSON document.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable
+from pathlib import Path
+
+import numpy as np
+import typer
+
+from camdyn.cli.common import console, err_console
+from camdyn.errors import OutputError
+
+#: Suffixes of a netCDF result file.
+NETCDF_SUFFIXES = (".nc",)
+#: The version of every JSON schema (docs/cli-json.md); bumped when a key changes meaning.
+SCHEMA_VERSION = 1
+
+
+def _refuse_existing(path: Path, force: bool) -> None:
+    if path.is_dir():
+        raise OutputError(f"cannot write {path}: it is a folder")
+    if path.exists() and not force:
+        raise OutputError(f"{path} exists; pass --force to overwrite")
+
+
+def check_outputs(netcdf: Path | None = None, figure: Path | None = None, record: Path | None = None,
+                  json_file: Path | None = None, figures: Iterable[Path] = (), others: Iterable[Path] = (),
+                  force: bool = False, expected_bytes: int | None = None) -> None:
+    """Refuse, before any work, output paths that cannot be written, whose suffix does
+    not match their format, or that exist (unless ``force``): a netCDF result must end in
+    ``.nc``, a figure (``figure``, ``figures``) in an image format matplotlib writes, a
+    record in a record format (``.csv``, ``.nc``, ``.uff``); ``json_file`` and ``others``
+    have no suffix rule. ``expected_bytes`` [B] also refuses a netCDF result larger than
+    the free space of its disk."""
+    from camdyn.io.atomic import check_writable
+
+    checks = []
+    if netcdf is not None:
+        if Path(netcdf).suffix.lower() not in NETCDF_SUFFIXES:
+            raise OutputError(f"cannot write {netcdf}: results are netCDF files, so the name must end in .nc")
+        checks.append((Path(netcdf), expected_bytes))
+    for path in [figure, *figures]:
+        if path is not None:
+            from camdyn.plotting import figure_format
+
+            figure_format(path)
+            checks.append((Path(path), None))
+    if record is not None:
+        from camdyn.io.measurements import RECORD_SUFFIXES
+
+        if Path(record).suffix.lower() not in RECORD_SUFFIXES:
+            raise OutputError(f"cannot write {record}: a record is .csv, .nc/.h5 or .uff/.unv")
+        checks.append((Path(record), None))
+    checks += [(Path(p), None) for p in [json_file, *others] if p is not None]
+    for path, size in checks:
+        _refuse_existing(path, force)
+        check_writable(path, size)
+
+
+def human_size(n: int) -> str:
+    """``n`` bytes as text with a decimal unit: ``850 B``, ``85 kB``, ``3.2 MB``."""
+    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if n >= scale:
+            value = n / scale
+            return f"{value:.1f} {unit}" if value < 10 else f"{value:.0f} {unit}"
+    return f"{n} B"
+
+
+def announce(path: Path | str, json_out: bool = False, detail: str = "") -> dict:
+    """Print ``wrote PATH (SIZE)`` and ``detail`` (standard error with ``--json``); return
+    the file's entry of a JSON document's ``files`` list."""
+    entry = file_entry(path)
+    target = err_console if json_out else console
+    target.print(f"wrote {path} ({human_size(entry['bytes'])}){detail}", markup=False, highlight=False,
+                 soft_wrap=True)
+    return entry
+
+
+def file_entry(path: Path | str) -> dict:
+    """``{"path": ..., "bytes": ...}`` of a written file."""
+    return {"path": str(path), "bytes": Path(path).stat().st_size}
+
+
+def _plain(obj):
+    """``obj`` with numpy values as Python ones and non-finite numbers as None (JSON has no NaN)."""
+    if isinstance(obj, dict):
+        return {str(k): _plain(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_plain(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _plain(obj.tolist())
+    if isinstance(obj, np.generic):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if obj is None or isinstance(obj, (str, int, float, bool)):
+        return obj
+    return str(obj)
+
+
+def _dumps(obj, level: int = 0) -> str:
+    """Indented JSON, with a list of plain values on one line (a per-impact column is one
+    line, not one line per number)."""
+    pad, end = "  " * (level + 1), "  " * level
+    if isinstance(obj, dict) and obj:
+        items = [f"{pad}{json.dumps(k)}: {_dumps(v, level + 1)}" for k, v in obj.items()]
+        return "{\n" + ",\n".join(items) + f"\n{end}}}"
+    if isinstance(obj, list) and any(isinstance(v, (dict, list)) for v in obj):
+        return "[\n" + ",\n".join(pad + _dumps(v, level + 1) for v in obj) + f"\n{end}]"
+    return json.dumps(obj, allow_nan=False)
+
+
+def print_json(obj) -> None:
+    """Print ``obj`` as one JSON document on standard output."""
+    typer.echo(_dumps(_plain(obj)))
+
+
+def emit_json(command: str, summary: dict, **details) -> dict:
+    """Print ``{"schema": "camdyn.COMMAND/1", "summary": {...}, ...details}`` (the
+    headline numbers first, then the details); return it."""
+    document = {"schema": f"camdyn.{command}/{SCHEMA_VERSION}", "summary": summary, **details}
+    print_json(document)
+    return document
