@@ -23,7 +23,7 @@ spec = spec_from_dict({
     "vary": [{"key": "motion.speed", "start": "12 Hz", "stop": "20 Hz", "num": 20}],
     "run": {"revolutions": 150, "discard": 100, "samples_per_revolution": 32, "chunk": 5},
     "metrics": {"names": ["poincare", "impacts", "regime"], "harmonics": 4},
-    "output": {"path": "bifurcation.nc"},
+    "output": {"path": str(folder / "bifurcation.nc")},
 }, base_dir=folder, name="bifurcation")
 ds = run_sweep(spec, workers=0, progress=False).load()
 
