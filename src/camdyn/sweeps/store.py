@@ -71,6 +71,7 @@ class Checkpoint:
         self.say = say or (lambda _msg: None)
         self.folder = Path(str(spec.output) + ".parts")
         self.digest = spec.digest()
+        self._verified: set[int] = set()   # chunks this process wrote or has checked
         self._lock = _lock(Path(str(spec.output) + ".lock"))
         manifest = self.folder / "manifest.json"
         if self.folder.exists() and restart:
@@ -104,10 +105,14 @@ class Checkpoint:
 
     def done(self) -> set[int]:
         """Chunks whose parts are on disk and intact. A part that cannot be read, belongs to
-        another sweep or fails its checksum is removed (and so computed again)."""
+        another sweep or fails its checksum is removed (and so computed again). Each part is
+        read and checked once per process: the ones written or checked before are trusted."""
         good = set()
         for path in sorted(self.folder.glob("chunk_*.npz")):
             chunk = int(path.stem[6:])
+            if chunk in self._verified:
+                good.add(chunk)
+                continue
             try:
                 self.load(chunk)
             except ValueError as exc:
@@ -115,6 +120,7 @@ class Checkpoint:
                 path.unlink(missing_ok=True)
                 continue
             good.add(chunk)
+            self._verified.add(chunk)
         return good
 
     def save(self, chunk: int, arrays: dict) -> None:
@@ -123,6 +129,7 @@ class Checkpoint:
         with atomic_output(self.path(chunk)) as tmp:
             with tmp.open("wb") as fh:
                 np.savez(fh, **stamped)
+        self._verified.add(chunk)
 
     def load(self, chunk: int) -> dict:
         """The arrays of one chunk.
