@@ -446,3 +446,13 @@ def test_ctrl_c_stops_an_inline_sweep_at_once(tmp_path):
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 0 and out.strip() == "caught", (out, err)
     assert time.time() - sent < 2.0, "the compiled kernel did not stop between points"
+
+
+@pytest.mark.parametrize("sig, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_interrupt_during_start_up_is_still_one_line(tmp_path, sig, status):
+    proc = _start(["simulate", "sundar2014-impact", "--revolutions", "20"], tmp_path)
+    time.sleep(0.2)      # inside the imports, before the command runs
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == status, err
+    assert err.strip().splitlines() == ["interrupted"], err

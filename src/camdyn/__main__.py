@@ -1,6 +1,6 @@
 """``python -m camdyn``: the command line (the same as the ``camdyn`` script)."""
 
-from camdyn.cli.app import run
+from camdyn.cli import run
 
 if __name__ == "__main__":
     run()

@@ -125,8 +125,8 @@ def main(argv=None) -> int:
     traceback of an unexpected error.
     """
     _interrupt.update(signal=signal.SIGINT, exception=None, arrived=False)
-    warnings.showwarning = _show_warning
-    sys.unraisablehook = _quiet_unraisable
+    hooks = warnings.showwarning, sys.unraisablehook
+    warnings.showwarning, sys.unraisablehook = _show_warning, _quiet_unraisable
     previous = {}
     try:
         for sig in (signal.SIGINT, signal.SIGTERM):
@@ -164,14 +164,11 @@ def main(argv=None) -> int:
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+        warnings.showwarning, sys.unraisablehook = hooks
     if result == 130:   # typer's exit status for KeyboardInterrupt
         return _interrupted(None)
     return result if isinstance(result, int) else 0
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
-
-
-def run() -> None:  # console-script entry point
     sys.exit(main())
