@@ -456,3 +456,31 @@ def test_interrupt_during_start_up_is_still_one_line(tmp_path, sig, status):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == status, err
     assert err.strip().splitlines() == ["interrupted"], err
+
+
+LATE_SIGNAL_SCRIPT = """
+import os, sys, time, types
+class Slow:   # a module whose clean-up takes time, as numba's and dask's do at shutdown
+    def __del__(self, write=os.write, sleep=time.sleep):
+        write(1, b"finalizing\\n")
+        sleep(2.0)
+module = types.ModuleType("slow_shutdown")
+module.keep = Slow()
+sys.modules["slow_shutdown"] = module
+sys.argv = ["camdyn", "--version"]
+from camdyn.cli import run
+run()
+"""
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_signal_during_interpreter_shutdown_does_not_kill_a_finished_command(tmp_path, sig):
+    # Python puts the default handlers back while it shuts down; a SIGTERM there used to
+    # kill a finished sweep with status -15 (seen in CI, a signal sent as the sweep ended).
+    proc = subprocess.Popen([sys.executable, "-c", LATE_SIGNAL_SCRIPT], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, preexec_fn=_default_sigint, cwd=tmp_path)
+    assert proc.stdout.readline().startswith("camdyn ")
+    assert proc.stdout.readline().strip() == "finalizing"
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0 and err == "", err

@@ -26,4 +26,22 @@ def run() -> None:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         sys.exit(128 + int(arrived.get("signal", signal.SIGINT)))
-    sys.exit(main())
+    try:
+        status = main()
+    except KeyboardInterrupt:   # arrived as main() returned, after it put ``stop`` back
+        print("interrupted", file=sys.stderr)
+        status = 128 + int(arrived.get("signal", signal.SIGINT))
+    _ignore_late_signals()
+    sys.exit(status)
+
+
+def _ignore_late_signals() -> None:
+    """The command is over: ignore SIGINT and SIGTERM while the interpreter shuts down.
+
+    Python's finalization puts back the default handlers of the signals it handled, so a
+    signal arriving then (numba and dask make shutdown take a few tenths of a second)
+    would kill the process without a word. Ignored handlers are left as they are.
+    """
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        if signal.getsignal(sig) is not signal.SIG_IGN:
+            signal.signal(sig, signal.SIG_IGN)
