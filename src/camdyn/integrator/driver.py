@@ -11,9 +11,12 @@ Algorithm (per accepted step from ``t`` to ``t + h``):
    exact rates at both ends, which the system computes from the acceleration; this
    catches grazing contacts that begin and end inside one step), or at the midpoint
    for a guard whose rate is unknown;
-4. locate the earliest crossing by the Illinois method on the interpolant, cut the
-   step there, log the event, switch mode and restart (the right-hand side is smooth
-   within a mode, so no step straddles a discontinuity);
+4. locate the earliest crossing by the Illinois method on the interpolant; unless it
+   lies within the step's first 1 % or last 0.1 %, take the step again so that it ends
+   just past the crossing (its end state then has the step's error control, not the
+   interpolant's) and locate it again; cut the step there, log the event, switch mode
+   and restart (the right-hand side is smooth within a mode, so no step straddles a
+   discontinuity; a retaken step counts as rejected);
 5. fill the requested output times passed over, from the interpolant.
 
 Counters (``COUNT_*``, :mod:`camdyn.integrator.counters`) record accepted and rejected
@@ -88,6 +91,12 @@ EVENT_COLUMNS = ("time", "guard", "new_sign", "alpha", "alpha_dot", "guard0", "g
                  "monitor_max")
 N_EVENT_COLUMNS = len(EVENT_COLUMNS)
 MODE_SIZE = 5
+#: A step whose event lies between these fractions of it is taken again, ending just
+#: past the event (by the margin, a fraction of the new step) [-]; near the step's start
+#: the interpolant is as accurate as the state it starts from.
+EVENT_RETRY_ABOVE = 0.01
+EVENT_RETRY_BELOW = 0.999
+EVENT_RETRY_MARGIN = 1e-6
 NG = systems.N_GUARDS
 
 
@@ -355,6 +364,22 @@ def _advance(system, t, h, t_stop, e, order, y, f, y1, f1, dwork, kind, mode, p,
     return t, i_out, monitor_max, h
 
 
+@numba.njit(cache=True, inline="always")
+def _retake(k_event, tau_event, h, retried, counters):
+    """Whether to take the step again so that it ends just past its event, and the step
+    [s] to take: its end state then carries the step's own error control, not the
+    interpolant's (unestimated) error, which is large where the step straddles a point
+    at which the mode's right-hand side is not smooth (a Hertz force |delta|^1.5 at
+    separation). Not twice in a row, nor for an event near the step's start, where the
+    interpolant is as accurate as the state it starts from; a retaken step counts as
+    rejected."""
+    if k_event >= 0 and EVENT_RETRY_ABOVE < tau_event < EVENT_RETRY_BELOW and not retried:
+        counters[COUNT_ACCEPTED] -= 1
+        counters[COUNT_REJECTED] += 1
+        return h * tau_event * (1.0 + EVENT_RETRY_MARGIN), True
+    return h, False
+
+
 @numba.njit(cache=True, pipeline_class=InlinedPipeline)
 def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, method, max_steps,
               max_events, interruptible=False):
@@ -411,6 +436,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     n_events = 0
     last_event_t = -math.inf
     zeno = 0
+    retried = False
     while t < t_end:
         h, last, stop = _next_step(t, h, h_max, t_end, max_steps, counters)
         if stop:
@@ -433,7 +459,8 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
                                 gv, grv, ready, counters)
         tau_event, k_event, ready = earliest_crossing(system, t, h, y, f, y1, f1, dwork, kind, mode, p, k16, ytmp,
                                                       f7, g, gr, g1, gr1, gv, pts, g_tmp, gr_tmp, ready, counters)
-        if k_event >= 0:
+        h, retried = _retake(k_event, tau_event, h, retried, counters)
+        if k_event >= 0 and not retried:
             t_new, i_out, monitor_max = _cut_at_event(system, tau_event, t, h, y, f, y1, f1, dwork, kind, mode, p,
                                                       ytmp, yo, g, gr, t_out, i_out, y_out, mode_out, monitor_max)
             n_events = _log_event(system, k_event, t_new, y, g, mode, p, events, n_events, monitor_max, counters)
@@ -444,7 +471,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             last_event_t = t_new
             t = t_new
             monitor_max, h = _restart(system, t, h, tau_event, y, f, g, gr, mode, p, h_regime, counters)
-        else:
+        elif k_event < 0:
             t, i_out, monitor_max, h = _advance(system, t, h, t_end if last else t + h, e, order, y, f, y1, f1,
                                                 dwork, kind, mode, p, k16, ytmp, f7, yo, g, gr, g1, gr1, t_out, i_out,
                                                 y_out, mode_out, monitor_max, h_regime, ready, counters)
