@@ -128,7 +128,8 @@ def impact_table(events: np.ndarray) -> dict:
 
 def simulate(system: System, speed=None, revolutions: float = 30.0, duration: float | None = None,
              sample_rate: float = 20e3, rtol: float = 1e-8, atol: float = 1e-10, method: str = "auto",
-             initial_state=None, max_step: float | None = None, max_steps: int = 50_000_000) -> xr.Dataset:
+             initial_state=None, max_step: float | None = None, max_steps: int = 50_000_000,
+             variables=None) -> xr.Dataset:
     """Simulate the follower's motion.
 
     Parameters
@@ -156,6 +157,14 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
     max_step : float, optional
         Largest step [s]; default 1/32 of the cam period, so that no contact is
         skipped in free flight.
+    max_steps : int
+        Largest number of accepted steps.
+    variables : sequence of str, optional
+        The time series to return (:data:`VARIABLES`: the state ``alpha``,
+        ``alpha_dot``, ``cam_work``, and the derived channels such as ``Fn`` or
+        ``Nx``), and ``"impact"`` for the impact table; default all. The derived
+        channels come from one compiled pass over the samples, which is skipped when
+        none is asked for.
 
     Returns
     -------
@@ -169,6 +178,7 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
     if method not in METHODS:
         raise ParameterError(f"method must be one of {sorted(METHODS)}, got {method!r}")
     limits.check_tolerances(rtol, atol)
+    wanted = check_variables(variables)
     revolutions = limits.check_number("revolutions", revolutions)
     if duration is not None:
         duration = limits.check_number("duration", duration, "s")
@@ -204,21 +214,56 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
     if status != driver.STATUS_OK:
         t_fail = t_out[np.isnan(y[:, 0])][0] if np.isnan(y[:, 0]).any() else duration
         raise SimulationError(f"simulation {driver.STATUS_MESSAGES[status]} near t = {t_fail:.6g} s")
-    return _dataset(system, prep, t_out, y, modes, events, counters, elapsed, rtol, atol, method)
+    return _dataset(system, prep, t_out, y, modes, events, counters, elapsed, rtol, atol, method, wanted)
 
 
-def _dataset(system, prep, t, y, modes, events, counters, elapsed, rtol, atol, method) -> xr.Dataset:
-    chans = derived(t, y, modes, prep.p)
-    data = {
-        "alpha": (("time",), y[:, 0], {"units": "rad", "long_name": "follower angle (clockwise)"}),
-        "alpha_dot": (("time",), y[:, 1], {"units": "rad/s", "long_name": "follower angular velocity"}),
-        "cam_work": (("time",), y[:, 2], {"units": "J", "long_name": "work done by the cam on the follower"}),
-    }
-    for j, (name, unit, long_name) in enumerate(CHANNELS):
-        values = chans[:, j]
-        if name == "in_contact":
-            values = values.astype(np.int8)
-        data[name] = (("time",), values, {"units": unit, "long_name": long_name})
+#: The state's time series: name, unit, long name, in the state's order.
+STATE_VARIABLES = (
+    ("alpha", "rad", "follower angle (clockwise)"),
+    ("alpha_dot", "rad/s", "follower angular velocity"),
+    ("cam_work", "J", "work done by the cam on the follower"),
+)
+#: Every name :func:`simulate` accepts in ``variables``.
+VARIABLES = tuple(name for name, _, _ in STATE_VARIABLES + CHANNELS) + ("impact",)
+
+
+def check_variables(variables) -> frozenset:
+    """The set of names asked for (all of :data:`VARIABLES` for ``None``); an unknown
+    name, a bare string or an empty list is refused with a :class:`ParameterError`."""
+    if variables is None:
+        return frozenset(VARIABLES)
+    if isinstance(variables, str):
+        raise ParameterError(f"variables must be a list of names, got the string {variables!r}")
+    names = list(variables)
+    unknown = [name for name in names if name not in VARIABLES]
+    if unknown:
+        raise ParameterError(f"unknown variable(s) {', '.join(map(repr, unknown))}; "
+                             f"choose from {', '.join(VARIABLES)}")
+    if not names:
+        raise ParameterError("variables is empty: ask for at least one, e.g. ['alpha']")
+    return frozenset(names)
+
+
+def _dataset(system, prep, t, y, modes, events, counters, elapsed, rtol, atol, method, wanted) -> xr.Dataset:
+    data = {}
+    for j, (name, unit, long_name) in enumerate(STATE_VARIABLES):
+        if name in wanted:
+            data[name] = (("time",), y[:, j], {"units": unit, "long_name": long_name})
+    if any(name in wanted for name, _, _ in CHANNELS):
+        chans = derived(t, y, modes, prep.p)
+        for j, (name, unit, long_name) in enumerate(CHANNELS):
+            if name in wanted:
+                values = chans[:, j].astype(np.int8) if name == "in_contact" else chans[:, j]
+                data[name] = (("time",), values, {"units": unit, "long_name": long_name})
+    if "impact" in wanted:
+        data.update(_impact_variables(events))
+    ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
+    ds.attrs.update(_attributes(system, prep, counters, elapsed, rtol, atol, method))
+    return ds
+
+
+def _impact_variables(events) -> dict:
+    """The impact table as ``impact_*`` variables over the ``impact`` dimension."""
     imp = impact_table(events)
     imp_meta = {
         "time": ("s", "impact onset time"),
@@ -228,9 +273,12 @@ def _dataset(system, prep, t, y, modes, events, counters, elapsed, rtol, atol, m
         "peak_force": ("N", "peak normal force"),
         "duration": ("s", "contact duration"),
     }
-    for name, (unit, long_name) in imp_meta.items():
-        data[f"impact_{name}"] = (("impact",), imp[name], {"units": unit, "long_name": long_name})
-    ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
+    return {f"impact_{name}": (("impact",), imp[name], {"units": unit, "long_name": long_name})
+            for name, (unit, long_name) in imp_meta.items()}
+
+
+def _attributes(system, prep, counters, elapsed, rtol, atol, method) -> dict:
+    """The run's attributes: parameters as TOML, tolerances, equilibrium, solver counters."""
     eq = prep.equilibrium
     attrs = {
         "title": f"camdyn simulation of {system.name}",
@@ -248,5 +296,4 @@ def _dataset(system, prep, t, y, modes, events, counters, elapsed, rtol, atol, m
     }
     for i, name in enumerate(driver.COUNTER_NAMES):
         attrs[f"solver_{name}"] = int(counters[i])
-    ds.attrs.update(attrs)
-    return ds
+    return attrs
