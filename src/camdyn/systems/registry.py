@@ -12,7 +12,9 @@ Each system provides, for a state ``y`` of 3 components and a mode vector:
 - ``monitor(t, y, mode, p)``: a scalar whose maximum between events is logged.
 
 System 0 is the cam-follower (:mod:`camdyn.model.dynamics`); system 1 is a forced
-linear oscillator with a closed-form solution, used to test the integrator.
+linear oscillator with a closed-form solution, and system 2 the same oscillator against
+a rigid wall with Newton's restitution (:mod:`camdyn.model.impact_oscillator`), whose
+impacts reset the state in :func:`transition`; both test the integrator.
 """
 
 from __future__ import annotations
@@ -21,11 +23,12 @@ import math
 
 import numba
 
-from camdyn.model import dynamics
+from camdyn.model import dynamics, impact_oscillator
 from camdyn.model import layout as L
 
 CAM_FOLLOWER = 0
 OSCILLATOR = 1
+RIGID_IMPACT = 2
 N_GUARDS = 3
 
 
@@ -74,6 +77,8 @@ def jacobian(system, t, y, f0, mode, p, jac):
 def guards(system, t, y, accel, p, values, rates):
     if system == CAM_FOLLOWER:
         dynamics.guards(t, y, accel, p, values, rates)
+    elif system == RIGID_IMPACT:
+        impact_oscillator.guards(t, y, p, values, rates)
     else:
         values[0] = y[0]
         rates[0] = y[1]
@@ -98,6 +103,8 @@ def expected_sign(system, k, mode, p):
         if mode[L.MODE_IMPACT] > 0.5:
             return 1.0 if mode[L.MODE_COMPRESSING] > 0.5 else -1.0
         return 0.0
+    if system == RIGID_IMPACT:
+        return 1.0 if k == 0 else 0.0   # the gap to the wall stays positive in flight
     if k == 0:
         return mode[0]
     return 0.0
@@ -124,6 +131,8 @@ def transition(system, k, t, y, values, mode, p):
                 # watching delta_dot, which in sustained stiff contact hovers at zero and
                 # would cross it on rounding noise alone
                 mode[L.MODE_IMPACT] = 0.0
+    elif system == RIGID_IMPACT:
+        impact_oscillator.reset(y, p)   # the state jumps; the mode stays
     else:
         mode[0] = -mode[0]
 
@@ -160,6 +169,8 @@ def preferred_method(system, mode, p):
         # chapter 4 rig RODAS4 suffers order reduction at |h omega_contact| ~ 1 and needs
         # more steps than the explicit methods at equal accuracy, and impacts are not
         # stiff; DOP853 needs the fewest right-hand-side calls in both regimes.
+        return 3
+    if system == RIGID_IMPACT:
         return 3
     return 2 if p[4] > 0.5 else 1
 
