@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import copy
+import functools
 import math
 import time as _time
 
@@ -64,9 +66,26 @@ def _check_contact_on_follower(system: System, eq: Equilibrium) -> None:
             f"(cam.pivot_x) or lengthen the bar")
 
 
-def prepare(system: System) -> Prepared:
-    """Validate ``system`` against its geometry and compute the initial state."""
+@functools.lru_cache(maxsize=64)
+def _prepared(system: System) -> Prepared:
     return Prepared(system)
+
+
+def prepare(system: System) -> Prepared:
+    """Validate ``system`` against its geometry and compute the initial state.
+
+    The static equilibrium is solved once per distinct system (systems are immutable and
+    hashable; the last 64 are kept): the result is a copy whose arrays the caller may
+    change. A refused system is refused again on every call."""
+    cached = _prepared(system)
+    prep = copy.copy(cached)
+    prep.p = cached.p.copy()
+    prep.y0 = cached.y0.copy()
+    return prep
+
+
+#: The parameters as TOML text, for the result's attributes (once per distinct system).
+_parameters_toml = functools.lru_cache(maxsize=64)(system_to_toml)
 
 
 def penetration_resolution(prep: Prepared, rtol: float, atol: float) -> float:
@@ -283,7 +302,7 @@ def _attributes(system, prep, counters, elapsed, rtol, atol, method) -> dict:
     attrs = {
         "title": f"camdyn simulation of {system.name}",
         "citation": system.citation,
-        "parameters_toml": system_to_toml(system),
+        "parameters_toml": _parameters_toml(system),
         "speed_hz": system.motion.speed,
         "rtol": rtol, "atol": atol, "method": method,
         "elapsed_s": elapsed,
