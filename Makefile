@@ -12,7 +12,7 @@ $(BIN)/.installed: pyproject.toml
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $@
 
-.PHONY: demo test bench install clean mutation docs docs-full docs-links figures
+.PHONY: demo test bench bench-peers install clean mutation docs docs-full docs-links figures
 install: $(BIN)/.installed
 
 demo: $(BIN)/.installed
@@ -36,6 +36,24 @@ mutation: $(BIN)/.installed
 bench: $(BIN)/.installed
 	$(BIN)/python benchmarks/bench_simulate.py
 	$(BIN)/python benchmarks/bench_identify.py
+
+# work-precision benchmark against compiled peers (SciPy, numbalsoda, CyRK) in its own
+# virtualenv, .venv-peers: numbalsoda builds from source with gfortran, which this installs
+# with apt-get where it is missing (with sudo where not root). Writes benchmarks/peers.json
+# and docs/figures/work_precision.png, about 15 minutes; BENCH_PEERS_ARGS=--quick for a
+# one-minute smoke check whose outputs go to the temporary directory.
+PEERS_VENV ?= .venv-peers
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+$(PEERS_VENV)/bin/.installed: pyproject.toml benchmarks/requirements-peers.txt
+	command -v gfortran >/dev/null || ($(SUDO) apt-get update && $(SUDO) apt-get install -y gfortran)
+	$(PYTHON) -m venv $(PEERS_VENV)
+	$(PEERS_VENV)/bin/python -m pip install --quiet --upgrade pip
+	$(PEERS_VENV)/bin/python -m pip install --quiet -e . -r benchmarks/requirements-peers.txt
+	touch $@
+
+bench-peers: $(PEERS_VENV)/bin/.installed
+	$(PEERS_VENV)/bin/python benchmarks/bench_peers.py $(BENCH_PEERS_ARGS)
 
 # documentation site (Sphinx) in docs/_build/html: `make docs` runs the gallery scripts of
 # examples/gallery/ (a few seconds each) and fails on any warning or broken internal link;

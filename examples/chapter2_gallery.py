@@ -5,32 +5,46 @@ The thesis gives no geometry for its chapter 2 rig, so these use the documented 
 `alzate2007-standin-impacting` (loses contact at 132 rpm like the thesis's rig, section
 2.5). Trends carry over; absolute numbers are the stand-ins'.
 
-Run: python examples/chapter2_gallery.py [FIGURE ...]   (default: all; about 12 minutes on 2 cores)
-Writes docs/figures/fig2_*.png and prints what each shows.
+Run: python examples/chapter2_gallery.py [FIGURE ...] [--data FILE]
+(FIGURE: 2.4, 2.7, 2.9, 2.10, 2.14, 2.16; default all, about 12 minutes on 2 cores).
+Writes docs/figures/fig2_*.png and prints what each shows; with ``--data`` also the
+numbers each figure shows, as JSON (tools/make_figures.py records them in
+docs/figures/figures.json).
+
+Each figure is two functions: ``data_*`` computes what it shows (a dict: lists are the
+recorded numbers, numpy arrays the long curves that are not recorded; angles in degrees,
+speeds in rpm, frequencies in Hz, forces in N) and ``draw_*`` draws it in camdyn's figure
+style (:mod:`camdyn.plotting.style`). tests/test_figures.py draws figs 2.4 and 2.7-2.8 (the
+long sweeps) from the numbers recorded in figures.json and the others from their data
+functions (a second each), and checks that no text overlaps or leaves the figure.
 """
 
+from __future__ import annotations
+
+import argparse
+import json
 import math
-import sys
 import tempfile
 from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-import numpy as np
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
 
-import camdyn
-from camdyn.analysis.harmonics import amplitude_spectrum
-from camdyn.analysis.linear import linearize
-from camdyn.analysis.restitution import energy_balance_residual
-from camdyn.analysis.spectra import resonance_peaks, spectrum_summary
-from camdyn.plotting import plot_regime_map
-from camdyn.sweeps import run_sweep, spec_from_dict
-from camdyn.sweeps.regime_map import regime_map
+import camdyn  # noqa: E402
+from camdyn.analysis.harmonics import amplitude_spectrum, harmonic_amplitudes  # noqa: E402
+from camdyn.analysis.kinematics import loss_of_contact_speed  # noqa: E402
+from camdyn.analysis.linear import linearize  # noqa: E402
+from camdyn.analysis.restitution import energy_balance_residual  # noqa: E402
+from camdyn.analysis.spectra import resonance_peaks, spectrum_summary  # noqa: E402
+from camdyn.plotting import plot_regime_map  # noqa: E402
+from camdyn.plotting.style import axis_label, save_figure, styled, tidy_axis  # noqa: E402
+from camdyn.sweeps import run_sweep, spec_from_dict  # noqa: E402
+from camdyn.sweeps.regime_map import regime_map  # noqa: E402
 
 OUT = Path(__file__).resolve().parent.parent / "docs" / "figures"
-WORK = Path(tempfile.mkdtemp(prefix="camdyn-gallery-"))
 IMPACTING = "alzate2007-standin-impacting"
 SLIDING = "alzate2007-standin"
 #: identified damping of the thesis (2.5): law -> overrides
@@ -43,175 +57,357 @@ MODELS = {"A": {"contact.damping": "A", "contact.damping_ratio": "0.125"},
 #: (camdyn.simulation.runner.penetration_resolution below 0.1)
 TOLERANCES = {"rtol": 1.5e-8, "atol": 1e-11}
 FIG_2_10 = {"contact.length": 1.6e-3, "contact.damping": "D", "contact.damping_ratio": 0.01, "contact.beta": 4.25}
+#: the file each figure is written to
+NAMES = {"2.4": "fig2_4_residual_damping_models.png", "2.7": "fig2_7_8_energy_balance.png",
+         "2.9": "fig2_9_regime_map.png", "2.10": "fig2_10_11_direction.png",
+         "2.14": "fig2_14_15_oscillating_cam.png", "2.16": "fig2_16_linear_vs_nonlinear.png"}
+ALPHA_DDOT = axis_label(r"$|\ddot\alpha|$", "rad/s^2")
+RPM = axis_label(r"$\Omega$", "rpm")
+HZ = axis_label("$f$", "Hz")
 
 
-def _speed_sweep(source, overrides, start, stop, num, name, revolutions=120, discard=80):
+def _rounded(values) -> list:
+    """Numbers as recorded: a list of floats to 6 significant digits, None where not finite
+    (a sweep point whose simulation failed)."""
+    return [float(f"{v:.6g}") if np.isfinite(v) else None for v in np.asarray(values, dtype=float)]
+
+
+def _failures(ax, x, failed, color) -> None:
+    """Crosses on the x axis at the sweep points whose simulation failed (no value)."""
+    failed = np.asarray(failed, dtype=bool)
+    if failed.any():
+        ax.plot(np.asarray(x)[failed], np.zeros(failed.sum()), "x", color=color, ms=5, mew=1.0)
+
+
+def recorded(data: dict) -> dict:
+    """The part of a figure's data recorded in figures.json: everything but numpy arrays."""
+    return {k: recorded(v) if isinstance(v, dict) else v for k, v in data.items() if not isinstance(v, np.ndarray)}
+
+
+def speed_sweep(source, overrides, start, stop, num, name, revolutions=120, discard=80, work=None, workers=None):
+    """A sweep over the cam speed (``start`` and ``stop`` as text: "100 rpm") of residual,
+    regime and impacts, written under ``work`` (default: a new temporary folder)."""
+    work = Path(work or tempfile.mkdtemp(prefix="camdyn-gallery-"))
     spec = spec_from_dict({"system": {"source": source, "set": overrides},
                            "vary": [{"key": "motion.speed", "start": start, "stop": stop, "num": num}],
                            "run": {"revolutions": revolutions, "discard": discard, **TOLERANCES},
                            "metrics": {"names": ["residual", "regime", "impacts"]},
-                           "output": {"path": str(WORK / f"{name}.nc")}}, name=name)
-    return run_sweep(spec, progress=False).load()
+                           "output": {"path": str(work / f"{name}.nc")}}, name=name)
+    return run_sweep(spec, workers=workers, progress=False).load()
 
 
-def fig_2_4():
-    """Residual response against speed for damping models A-E (thesis fig 2.4)."""
-    fig, axes = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+# --- fig 2.4 -----------------------------------------------------------------------------
+
+
+def data_2_4(speeds: int = 36) -> dict:
+    """Residual rms and peak-to-peak [deg] against speed [rpm] for damping models A-E."""
+    models = {}
     for law, overrides in MODELS.items():
-        ds = _speed_sweep(IMPACTING, overrides, "100 rpm", "170 rpm", 36, f"fig2_4_{law}")
+        ds = speed_sweep(IMPACTING, overrides, "100 rpm", "170 rpm", speeds, f"fig2_4_{law}")
         rpm = ds["motion.speed"].values * 60
-        axes[0].plot(rpm, ds.residual_rms, ".-", ms=3, lw=0.8, label=f"model {law}")
-        axes[1].plot(rpm, ds.residual_peak_to_peak, ".-", ms=3, lw=0.8, label=f"model {law}")
         irregular = rpm[ds.regime.values == 3]
-        print(f"  model {law}: irregular impacts at {len(irregular)} of 36 speeds"
+        models[law] = {"residual_rms_deg": _rounded(np.degrees(ds.residual_rms.values)),
+                       "residual_peak_to_peak_deg": _rounded(np.degrees(ds.residual_peak_to_peak.values)),
+                       "irregular": [bool(v) for v in ds.regime.values == 3],
+                       "failed": [bool(v) for v in ds.status.values != 0]}
+        print(f"  model {law}: irregular impacts at {len(irregular)} of {speeds} speeds"
               + (f", first at {irregular.min():.0f} rpm" if len(irregular) else ""))
-    axes[0].set_ylabel("rms of alpha_r [rad]")
-    axes[1].set_ylabel("peak-to-peak of alpha_r [rad]")
-    axes[1].set_xlabel("cam speed [rpm]")
-    axes[0].legend(fontsize=8)
-    axes[0].set_title("fig 2.4: residual response, damping models A-E (impacting stand-in)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(OUT / "fig2_4_residual_damping_models.png", dpi=120)
+    loss = 60 * loss_of_contact_speed(camdyn.load_system(IMPACTING))
+    return {"speed_rpm": _rounded(rpm), "loss_of_contact_rpm": round(loss, 2), "models": models}
 
 
-def fig_2_7_8():
-    """Energy-balance restitution estimate against the contact model (figs 2.7, 2.8)."""
+@styled
+def draw_2_4(data: dict, path) -> Path:
+    """Thesis fig 2.4: residual rms and peak-to-peak [deg] against speed [rpm], models A-E;
+    irregular impacts (no period up to 16 revolutions) as open markers."""
+    fig, axes = plt.subplots(2, 1, figsize=(8.0, 6.0), sharex=True)
+    rpm = np.asarray(data["speed_rpm"])
+    for i, (law, model) in enumerate(data["models"].items()):
+        irregular = np.asarray(model["irregular"], dtype=bool)
+        for ax, key in zip(axes, ("residual_rms_deg", "residual_peak_to_peak_deg")):
+            values = np.asarray(model[key], dtype=float)
+            ax.plot(rpm, values, "-", color=f"C{i}", lw=0.8, label=f"model {law}")
+            ax.plot(rpm[~irregular], values[~irregular], "o", color=f"C{i}", ms=3, mew=0)
+            ax.plot(rpm[irregular], values[irregular], "o", mfc="white", mec=f"C{i}", ms=4.5, mew=0.9)
+            _failures(ax, rpm, model["failed"], f"C{i}")
+    for ax in axes:
+        ax.axvline(data["loss_of_contact_rpm"], color="k", ls="--", lw=0.8,
+                   label=f"loss of contact ({data['loss_of_contact_rpm']:.0f} rpm, inverse kinematics)")
+        tidy_axis(ax.yaxis, 5)
+    axes[1].plot([], [], "o", mfc="white", mec="0.3", ms=4.5, mew=0.9, label="irregular impacts")
+    if any(any(model["failed"]) for model in data["models"].values()):
+        axes[1].plot([], [], "x", color="0.3", ms=5, mew=1.0, label="simulation failed")
+    axes[0].set_ylabel(axis_label(r"$\alpha_r$ rms", "deg"))
+    axes[1].set_ylabel(axis_label(r"$\alpha_r$ p-p", "deg"))
+    axes[1].set_xlabel(RPM)
+    tidy_axis(axes[1].xaxis, 8)
+    handles, labels = axes[1].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=4)
+    fig.align_ylabels(axes)
+    fig.suptitle("fig 2.4: residual response $\\alpha_r$, damping models A-E (impacting stand-in)")
+    return save_figure(fig, path)
+
+
+# --- figs 2.7 and 2.8 --------------------------------------------------------------------
+
+#: the two panels: first and last speed [rpm], number of speeds, restitutions xi [-]
+PANELS_2_7_8 = ((20, 160, 36, (0.05, 0.2, 0.4, 0.6)), (100, 900, 41, (0.2, 0.6, 1.0)))
+
+
+def energy_balance_curves(start: float, stop: float, xis, points: int = 60) -> dict:
+    """Energy-balance residual [deg] (eqs 2.30-2.33) from ``start`` to ``stop`` [rpm]."""
     system = camdyn.load_system(IMPACTING, MODELS["D"])
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    for ax, (start, stop, num, xis) in zip(axes, [(20, 160, 36, (0.05, 0.2, 0.4, 0.6)),
-                                                  (100, 900, 41, (0.2, 0.6, 1.0))]):
-        ds = _speed_sweep(IMPACTING, MODELS["D"], f"{start} rpm", f"{stop} rpm", num, f"fig2_8_{start}")
+    rpm = np.linspace(start, stop, points)
+    return {"speed_rpm": _rounded(rpm),
+            "residual_deg": {f"{xi:g}": _rounded(np.degrees(energy_balance_residual(system, rpm / 60, xi)))
+                             for xi in xis}}
+
+
+def data_2_7_8() -> dict:
+    """Contact model (law D) against the energy-balance estimate: peak-to-peak residual
+    [deg] against speed [rpm], at low speeds (fig 2.7) and over a broad range (fig 2.8)."""
+    system = camdyn.load_system(IMPACTING, MODELS["D"])
+    panels = []
+    for start, stop, num, xis in PANELS_2_7_8:
+        ds = speed_sweep(IMPACTING, MODELS["D"], f"{start} rpm", f"{stop} rpm", num, f"fig2_8_{start}")
         rpm = ds["motion.speed"].values * 60
-        ax.plot(rpm, ds.residual_peak_to_peak, "k.-", ms=4, lw=0.8, label="contact model (law D)")
-        fine = np.linspace(start, stop, 200)
-        for xi in xis:
-            est = energy_balance_residual(system, fine / 60, xi)
-            ax.plot(fine, est, lw=1, label=f"energy balance, xi = {xi:g}")
-        ax.set_xlabel("cam speed [rpm]")
-        ax.set_ylabel("peak-to-peak residual alpha_p^r [rad]")
-        ax.legend(fontsize=7)
-        below = rpm < 125
-        if ax is axes[0]:
-            match = {xi: float(np.max(np.abs(energy_balance_residual(system, rpm[below] / 60, xi)
-                                               - ds.residual_peak_to_peak.values[below]))) for xi in xis}
-            print("  below 125 rpm, largest gap energy balance - contact model [rad]: "
-                  + ", ".join(f"xi {k:g}: {v:.3g}" for k, v in match.items()))
-    axes[0].set_title("fig 2.7: low speeds", fontsize=9)
-    axes[1].set_title("fig 2.8: broad range (the follower saturates near 90 degrees)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(OUT / "fig2_7_8_energy_balance.png", dpi=120)
+        contact = np.degrees(ds.residual_peak_to_peak.values)   # NaN where the simulation failed
+        panels.append({"speed_rpm": _rounded(rpm), "contact_model_deg": _rounded(contact),
+                       "failed": [bool(v) for v in ds.status.values != 0],
+                       "energy_balance": energy_balance_curves(start, stop, xis)})
+        if start == 20:
+            below = rpm < 125
+            gaps = {xi: np.nanmax(np.abs(np.degrees(energy_balance_residual(system, rpm[below] / 60, xi))
+                                      - contact[below])) for xi in xis}
+            print("  below 125 rpm, largest gap energy balance - contact model [deg]: "
+                  + ", ".join(f"xi {k:g}: {v:.3g}" for k, v in gaps.items()))
+    return {"panels": panels}
 
 
-def fig_2_9():
-    """Contact regimes over spring stiffness and speed (fig 2.9)."""
+@styled
+def draw_2_7_8(data: dict, path) -> Path:
+    """Thesis figs 2.7 and 2.8: peak-to-peak residual [deg] of the contact model against
+    the energy-balance estimate for several restitutions xi, against speed [rpm]."""
+    fig, axes = plt.subplots(1, 2, figsize=(10.5, 4.2))
+    titles = ("fig 2.7: low speeds", "fig 2.8: broad range")
+    for ax, panel, title in zip(axes, data["panels"], titles):
+        contact = np.asarray(panel["contact_model_deg"], dtype=float)
+        ax.plot(panel["speed_rpm"], contact, "k.-", ms=4, lw=0.8, label="contact model (law D)")
+        if any(panel["failed"]):
+            _failures(ax, panel["speed_rpm"], panel["failed"], "k")
+            ax.plot([], [], "kx", ms=5, mew=1.0, label="contact model: simulation failed")
+        curves = panel["energy_balance"]
+        for i, (xi, values) in enumerate(curves["residual_deg"].items()):
+            ax.plot(curves["speed_rpm"], values, color=f"C{i}", label=rf"energy balance, $\xi$ = {xi}")
+        ax.set_xlabel(RPM)
+        ax.set_ylabel(axis_label(r"$\alpha_r$ p-p", "deg"))
+        ax.set_title(title)
+        ax.legend(loc="upper left")
+        tidy_axis(ax.xaxis, 8)
+        tidy_axis(ax.yaxis, 6)
+    fig.suptitle("energy-balance restitution estimate against the contact model (impacting stand-in)")
+    return save_figure(fig, path)
+
+
+# --- fig 2.9 -----------------------------------------------------------------------------
+
+
+def fig_2_9(path) -> None:
+    """Contact regimes over spring stiffness and speed (fig 2.9), drawn by camdyn.plotting."""
+    work = Path(tempfile.mkdtemp(prefix="camdyn-gallery-"))
     spec = spec_from_dict({"system": {"source": IMPACTING},
                            "vary": [{"key": "spring.stiffness", "start": "500 N/m", "stop": "5000 N/m", "num": 10},
                                     {"key": "motion.speed", "start": "40 rpm", "stop": "260 rpm", "num": 23}],
                            "run": {"revolutions": 40, "discard": 20, **TOLERANCES},
                            "metrics": {"names": ["regime", "impacts", "residual"]},
-                           "output": {"path": str(WORK / "fig2_9.nc")}}, name="fig2_9")
+                           "output": {"path": str(work / "fig2_9.nc")}}, name="fig2_9")
     ds = regime_map(spec, progress=False)
-    plot_regime_map(ds, OUT / "fig2_9_regime_map.png")
+    plot_regime_map(ds, path)
     print(f"  simulation agrees with inverse kinematics at {ds.attrs['agreement_kept_agree']}/"
           f"{ds.attrs['agreement_kept']} points in contact and {ds.attrs['agreement_lost_agree']}/"
           f"{ds.attrs['agreement_lost']} beyond; loss of contact at ks = 2000 N/m: "
           f"{float(ds.loss_of_contact_speed.interp({'spring.stiffness': 2000.0})) * 60:.0f} rpm")
 
 
-def fig_2_10_11():
-    """Spectra and Fn for de- and self-energizing rotation, line and point contact (figs 2.10, 2.11)."""
+# --- figs 2.10 and 2.11 ------------------------------------------------------------------
+
+
+def data_2_10_11() -> dict:
+    """Spectra of alpha_ddot [rad/s^2] and Fn [N] over one revolution, de- and
+    self-energizing rotation with line contact, and point contact (figs 2.10, 2.11)."""
     base = camdyn.load_system(SLIDING)
     runs = {}
-    for label, direction, kind in (("+300 rpm", 1, "line"), ("-300 rpm", -1, "line"),
+    for label, direction, kind in (("+300 rpm, line contact", 1, "line"), ("−300 rpm, line contact", -1, "line"),
                                    ("+300 rpm, point contact", 1, "point")):
         system = base.with_values(**FIG_2_10, **{"motion.direction": direction, "contact.kind": kind})
-        runs[label] = camdyn.simulate(system, speed=5.0, revolutions=10, sample_rate=20e3)
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4))
-    means = {}
-    for label, ds in runs.items():
+        ds = camdyn.simulate(system, speed=5.0, revolutions=10, sample_rate=20e3)
         summary = spectrum_summary(ds, window=8, peaks=1)
         f, a = amplitude_spectrum(ds, "alpha_ddot", 8)
         peak = resonance_peaks(f, a, 5.0, 1, relative=0.0)[0][0]   # however small against the harmonics
-        axes[0].semilogy(f, a, lw=0.8, label=label)
-        axes[1].semilogy(f, a, lw=0.8, label=f"{label}: peak {peak:.0f} Hz")
         win = ds.isel(time=slice(-4001, None))
-        axes[2].plot((win.time - win.time[0]) * 5.0, win.Fn, lw=0.8, label=label)
-        means[label] = float(win.Fn.mean())
-        print(f"  {label}: mean Fn {means[label]:.3f} N, resonance {peak:.0f} Hz "
+        runs[label] = {"peak_hz": round(float(peak), 1), "natural_hz": round(summary["natural_frequency_hz"], 1),
+                       "mean_Fn_N": round(float(win.Fn.mean()), 4), "frequency_hz": f, "amplitude": a,
+                       "revolution": ((win.time - win.time[0]) * 5.0).values, "Fn": win.Fn.values}
+        print(f"  {label}: mean Fn {runs[label]['mean_Fn_N']:.3f} N, resonance {peak:.0f} Hz "
               f"(linearized {summary['natural_frequency_hz']:.0f} Hz)")
+    return {"speed_rpm": 300.0, "runs": runs}
+
+
+@styled
+def draw_2_10_11(data: dict, path) -> Path:
+    """Thesis figs 2.10 and 2.11: spectra of alpha_ddot [rad/s^2] (cam harmonics; contact
+    resonance, peaks marked) and the normal force Fn [N] over one cam revolution."""
+    fig, axes = plt.subplots(1, 3, figsize=(12.0, 4.2))
+    for i, (label, run) in enumerate(data["runs"].items()):
+        f, a = run["frequency_hz"], run["amplitude"]
+        axes[0].semilogy(f, a, lw=0.8, color=f"C{i}")
+        axes[1].semilogy(f, a, lw=0.6, color=f"C{i}", label=f"{label} (peak {run['peak_hz']:.0f} Hz)")
+        axes[1].plot(run["peak_hz"], np.interp(run["peak_hz"], f, a) * 3, "v", color=f"C{i}", ms=6)
+        axes[2].plot(run["revolution"], run["Fn"], color=f"C{i}")
     axes[0].set_xlim(0, 60)
     axes[1].set_xlim(300, 2200)
     for ax in axes[:2]:
-        ax.set_xlabel("frequency [Hz]")
-        ax.set_ylabel("|alpha_ddot| [rad/s^2]")
-        ax.legend(fontsize=8)
-    axes[2].set_xlabel("time [revolutions]")
-    axes[2].set_ylabel("Fn [N]")
-    axes[2].legend(fontsize=8)
-    axes[0].set_title("fig 2.10a: cam harmonics", fontsize=9)
-    axes[1].set_title("fig 2.10b: contact resonance", fontsize=9)
-    axes[2].set_title("fig 2.11: normal force, the two directions (and point contact)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(OUT / "fig2_10_11_direction.png", dpi=120)
+        ax.set_xlabel(HZ)
+        ax.set_ylabel(ALPHA_DDOT)
+        tidy_axis(ax.xaxis, 6)
+    axes[2].set_xlabel(axis_label(r"$\Theta$", "rev"))
+    axes[2].set_ylabel(axis_label("$F_n$", "N"))
+    tidy_axis(axes[2].xaxis, 5)
+    axes[0].set_title("fig 2.10a: cam harmonics")
+    axes[1].set_title("fig 2.10b: contact resonance (peaks ▼)")
+    axes[2].set_title("fig 2.11: normal force over a revolution")
+    handles, labels = axes[1].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=3)
+    fig.suptitle("friction direction and contact model, sliding stand-in at 300 rpm")
+    return save_figure(fig, path)
 
 
-def fig_2_14_15():
-    """Oscillating cam: vr reverses; Coulomb against tanh friction (figs 2.14, 2.15)."""
+# --- figs 2.14 and 2.15 ------------------------------------------------------------------
+
+
+def data_2_14_15() -> dict:
+    """Oscillating cam (swing 180 deg peak to peak, 40 rpm, e = 0.7 rc): sliding velocity
+    [m/s], friction force Ff and pivot reaction Nx [N] over one oscillation, Coulomb and
+    tanh friction (figs 2.14, 2.15)."""
     rig = camdyn.load_system(SLIDING)
     e = 0.7 * rig.cam.semi_major
     system = rig.with_values(**{"cam.runout": e, "cam.pivot_y": 0.5 * rig.follower.width + rig.cam.semi_major + e,
                                 "spring.free_length": 0.085, "motion.kind": "oscillating",
                                 "motion.amplitude": math.pi, "motion.frequency": 40 / 60})
-    fig, axes = plt.subplots(3, 1, figsize=(7, 7), sharex=True)
+    laws = {}
     for law in ("coulomb", "tanh"):
-        ds = camdyn.simulate(system.with_values(**{"friction.law": law}), revolutions=2, sample_rate=10e3)
+        ds = camdyn.simulate(system.with_values(**{"friction.law": law}), revolutions=2,
+                             sample_rate=10e3)
         win = ds.isel(time=slice(ds.sizes["time"] // 2, None))
-        t = (win.time - win.time[0]) * 40 / 60
-        for ax, var in zip(axes, ("sliding_velocity", "Ff", "Nx")):
-            ax.plot(t, win[var], lw=0.9, label=f"{law} friction")
-            ax.set_ylabel(f"{var} [{win[var].attrs['units']}]")
-        print(f"  {law}: vr > 0 for {float((win.sliding_velocity > 0).mean()) * 100:.0f} % of the cycle, "
+        positive = float((win.sliding_velocity > 0).mean())
+        laws[law] = {"vr_positive_fraction": round(positive, 4), "Ff_range_N": _rounded([win.Ff.min(), win.Ff.max()]),
+                     "period": ((win.time - win.time[0]) * 40 / 60).values,
+                     **{var: win[var].values for var in ("sliding_velocity", "Ff", "Nx")}}
+        print(f"  {law}: vr > 0 for {positive * 100:.0f} % of the cycle, "
               f"Ff from {float(win.Ff.min()):.2f} to {float(win.Ff.max()):.2f} N")
-    axes[0].legend(fontsize=8)
-    axes[-1].set_xlabel("time [oscillation periods]")
-    axes[0].set_title("figs 2.14-2.15: oscillating cam, Theta_p = pi, 40 rpm, e = 0.7 rc", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(OUT / "fig2_14_15_oscillating_cam.png", dpi=120)
+    return {"swing_deg": 180.0, "frequency_rpm": 40.0, "runout_ratio": 0.7,
+            "smoothing_s_per_m": system.friction.smoothing, "laws": laws}
 
 
-def fig_2_16():
-    """Linearized against nonlinear model (fig 2.16)."""
+@styled
+def draw_2_14_15(data: dict, path) -> Path:
+    """Thesis figs 2.14 and 2.15: sliding velocity vr [m/s], friction force Ff [N] and
+    pivot reaction Nx [N] over one oscillation of the cam, Coulomb against tanh friction."""
+    fig, axes = plt.subplots(3, 1, figsize=(7.5, 6.5), sharex=True)
+    names = {"coulomb": "Coulomb", "tanh": rf"tanh, $\sigma$ = {data['smoothing_s_per_m']:g} s/m"}
+    for i, (law, run) in enumerate(data["laws"].items()):
+        for ax, var in zip(axes, ("sliding_velocity", "Ff", "Nx")):
+            ax.plot(run["period"], run[var], color=f"C{i}", label=names[law])
+    for ax, symbol, unit in zip(axes, ("$v_r$", "$F_f$", "$N_x$"), ("m/s", "N", "N")):
+        ax.set_ylabel(axis_label(symbol, unit))
+        ax.axhline(0.0, color="k", lw=0.5)
+        tidy_axis(ax.yaxis, 5)
+    axes[-1].set_xlabel(axis_label("$t f_o$", "-"))
+    tidy_axis(axes[-1].xaxis, 8)
+    axes[0].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    fig.align_ylabels(axes)
+    fig.suptitle(rf"figs 2.14-2.15: oscillating cam, $\Theta_p$ = {data['swing_deg']:g}°, "
+                 rf"$f_o$ = {data['frequency_rpm']:g} rpm, $e$ = {data['runout_ratio']:g} $r_c$")
+    return save_figure(fig, path)
+
+
+# --- fig 2.16 ----------------------------------------------------------------------------
+
+
+def data_2_16() -> dict:
+    """Spectra of alpha_ddot [rad/s^2], linearized (eqs 2.36-2.38) against nonlinear model,
+    sliding stand-in at 300 rpm (fig 2.16)."""
     system = camdyn.load_system(SLIDING).with_values(**FIG_2_10)
     nonlinear = camdyn.simulate(system, speed=5.0, revolutions=10, sample_rate=20e3)
     model = linearize(system, 5.0)
     linear = model.simulate(nonlinear.time.values, x0=float(nonlinear.alpha[0]) - model.equilibrium_angle)
     linear.attrs["speed_hz"] = 5.0
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
-    for label, ds in (("nonlinear", nonlinear), ("linear", linear)):
-        f, a = amplitude_spectrum(ds, "alpha_ddot", 8)
-        for ax in axes:
-            ax.semilogy(f, np.maximum(a, 1e-12), lw=0.8, label=label)
-    axes[0].set_xlim(0, 60)
-    axes[1].set_xlim(model.natural_frequency - 300, model.natural_frequency + 300)
-    for ax in axes:
-        ax.set_xlabel("frequency [Hz]")
-        ax.set_ylabel("|alpha_ddot| [rad/s^2]")
-        ax.legend(fontsize=8)
-    axes[0].set_title("fig 2.16a: the linear model has no super-harmonics", fontsize=9)
-    axes[1].set_title(f"fig 2.16b: near the natural frequency ({model.natural_frequency:.0f} Hz)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(OUT / "fig2_16_linear_vs_nonlinear.png", dpi=120)
-    from camdyn.analysis.harmonics import harmonic_amplitudes
+    spectra = {label: amplitude_spectrum(ds, "alpha_ddot", 8)
+               for label, ds in (("nonlinear", nonlinear), ("linearized", linear))}
     hn = harmonic_amplitudes(nonlinear, orders=(1, 2, 3), revolutions=8)
     hl = harmonic_amplitudes(linear, orders=(1, 2, 3), revolutions=8, speed=5.0)
     print(f"  harmonics 1-3 of alpha_ddot: nonlinear {np.round(hn, 4)}, linear {np.round(hl, 4)} rad/s^2")
+    return {"natural_hz": round(float(model.natural_frequency), 1),
+            "harmonics_rad_s2": {"nonlinear": _rounded(hn), "linearized": _rounded(hl)},
+            **{f"{label}_{k}": v for label, (f, a) in spectra.items() for k, v in (("hz", f), ("amplitude", a))}}
 
 
-FIGURES = {"2.4": fig_2_4, "2.7": fig_2_7_8, "2.9": fig_2_9, "2.10": fig_2_10_11, "2.14": fig_2_14_15,
-           "2.16": fig_2_16}
+@styled
+def draw_2_16(data: dict, path) -> Path:
+    """Thesis fig 2.16: spectra of alpha_ddot [rad/s^2] of the nonlinear and the linearized
+    model, cam harmonics and near the natural frequency."""
+    fig, axes = plt.subplots(1, 2, figsize=(10.5, 4.0))
+    fn = data["natural_hz"]
+    for i, label in enumerate(("nonlinear", "linearized")):
+        for ax in axes:
+            ax.semilogy(data[f"{label}_hz"], np.maximum(data[f"{label}_amplitude"], 1e-300), lw=0.8, color=f"C{i}",
+                        label=label + (" (eqs 2.36-2.38)" if label == "linearized" else ""))
+    axes[0].set_xlim(0, 60)
+    axes[1].set_xlim(fn - 300, fn + 300)
+    axes[1].axvline(fn, color="C3", ls="--", lw=0.8, label=f"linearized $f_n$ = {fn:.0f} Hz")
+    for ax in axes:
+        ax.set_ylim(1e-11, None)   # the linearized model's spectrum falls to the rounding error off its lines
+        ax.set_yticks([10.0 ** k for k in range(-10, 3, 2)])   # none below the axis, by the x labels
+        ax.set_xlabel(HZ)
+        ax.set_ylabel(ALPHA_DDOT)
+        tidy_axis(ax.xaxis, 7)
+    axes[0].set_title("fig 2.16a: the linear model has no super-harmonics")
+    axes[1].set_title("fig 2.16b: near the natural frequency")
+    handles, labels = axes[1].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=3)
+    fig.suptitle("linearized against nonlinear model, sliding stand-in at 300 rpm")
+    return save_figure(fig, path)
+
+
+#: figure key -> (data function, draw function)
+FIGURES = {"2.4": (data_2_4, draw_2_4), "2.7": (data_2_7_8, draw_2_7_8), "2.10": (data_2_10_11, draw_2_10_11),
+           "2.14": (data_2_14_15, draw_2_14_15), "2.16": (data_2_16, draw_2_16)}
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("figures", nargs="*", metavar="FIGURE",
+                        help=f"figures to make: {', '.join(NAMES)} (default: all)")
+    parser.add_argument("--data", type=Path, help="write the numbers each figure shows to this JSON file")
+    args = parser.parse_args(argv)
+    unknown = sorted(set(args.figures) - set(NAMES))
+    if unknown:
+        parser.error(f"unknown figure {', '.join(unknown)}; choose from {', '.join(NAMES)}")
+    OUT.mkdir(parents=True, exist_ok=True)
+    numbers = {}
+    for key in args.figures or NAMES:
+        if key == "2.9":
+            print(f"fig {key}: {fig_2_9.__doc__.splitlines()[0]}", flush=True)
+            fig_2_9(OUT / NAMES[key])
+            continue
+        compute, draw = FIGURES[key]
+        print(f"fig {key}: {compute.__doc__.splitlines()[0]}", flush=True)
+        data = compute()
+        draw(data, OUT / NAMES[key])
+        numbers[NAMES[key]] = recorded(data)
+    if args.data:
+        args.data.write_text(json.dumps(numbers, indent=1) + "\n")
+
 
 if __name__ == "__main__":
-    OUT.mkdir(parents=True, exist_ok=True)
-    for key in sys.argv[1:] or FIGURES:
-        print(f"fig {key}: {FIGURES[key].__doc__}")
-        FIGURES[key]()
+    main()

@@ -3,23 +3,33 @@
 Simulates the chapter 4 rig with Coulomb friction mu = 0.3, samples it at 9460 Hz over
 10 cam revolutions (the thesis's 1.15 Hz resolution at 11.55 Hz), runs the estimator with
 the thesis's one-harmonic truncation and with camdyn's default (20 harmonics), noise-free
-and with 1 % noise, and writes docs/friction-errors.md and docs/figures/friction_errors.png.
+and with 1 % noise, and writes docs/friction-errors-tables.md and docs/figures/friction_errors.png
+(drawn by :func:`draw_errors` in camdyn's figure style; tests/test_figures.py draws it again
+from the numbers recorded in docs/figures/figures.json and checks its layout).
 
-Run:  python examples/friction_error_tables.py
+Run:  python examples/friction_error_tables.py [--data FILE]
+(``--data``: also write the numbers the figure shows, as JSON, for tools/make_figures.py)
 """
 
 from __future__ import annotations
 
+import argparse
+import json
 import math
 import sys
 from pathlib import Path
 
-import numpy as np
+import matplotlib
 
-import camdyn
-from camdyn.errors import CamdynError
-from camdyn.identification.friction import estimate_friction
-from camdyn.records.synthesis import synthesize
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+import camdyn  # noqa: E402
+from camdyn.errors import CamdynError  # noqa: E402
+from camdyn.identification.friction import estimate_friction  # noqa: E402
+from camdyn.plotting.style import axis_label, save_figure, styled, tidy_axis  # noqa: E402
+from camdyn.records.synthesis import synthesize  # noqa: E402
 
 MU = 0.3
 FS = 9460.0
@@ -76,7 +86,42 @@ def misalignment(base):
     return "\n".join(lines)
 
 
-def main(out=ROOT / "docs"):
+#: the three tables' panels: short title, x-axis label
+PANELS = {"Table 4.5": ("table 4.5: circle, 11.55 Hz", axis_label("$e/a$", "-")),
+          "Table 4.6": ("table 4.6: circle, $e/a$ = 0.1", axis_label(r"$\Omega$", "Hz")),
+          "Table 4.7": ("table 4.7: ellipse, $e$ = 0.1 $a$, 8.33 Hz", axis_label(r"$\sqrt{1 - b^2/a^2}$", "-"))}
+#: the curves of each panel: key of the data, label, matplotlib format
+CURVES = (("thesis_percent", "thesis", "ks--"), ("one_harmonic_percent", "camdyn, 1 harmonic (thesis method)", "o-"),
+          ("default_percent", "camdyn default (20 harmonics)", "^-"),
+          ("noisy_percent", "camdyn default, 1 % noise", "v:"))
+
+
+@styled
+def draw_errors(series: dict, path) -> Path:
+    """Error of mu [%] (absolute value, log scale) of the thesis and of camdyn against
+    each table's parameter; a missing point is a record the estimator refused."""
+    fig, axes = plt.subplots(1, 3, figsize=(11.0, 3.8), sharey=True)
+    for ax, (table, data) in zip(axes, series.items()):
+        title, xlabel = PANELS[table]
+        for key, label, fmt in CURVES:
+            values = np.array([np.nan if v is None else abs(v) for v in data[key]])
+            ax.plot(data["x"], values, fmt, ms=4, label=label)
+        ax.set_yscale("log")
+        ax.set_title(title)
+        ax.set_xlabel(xlabel)
+        ax.grid(True, which="major", alpha=0.3)
+        tidy_axis(ax.xaxis, 6)
+    axes[0].set_ylabel(axis_label(r"$|\Delta\mu/\mu|$", "%"))
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=4)
+    fig.suptitle(r"error of the friction estimate, $\mu$ = 0.3 (a missing point: record refused)")
+    return save_figure(fig, path)
+
+
+def main(argv=None, out=ROOT / "docs"):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", type=Path, help="write the numbers the figure shows to this JSON file")
+    args = parser.parse_args(argv)
     base = camdyn.load_system("sundar2014-friction")
     sections = []
     series = {}
@@ -93,40 +138,22 @@ def main(out=ROOT / "docs"):
         lines = [f"### {title}", "",
                  "| case | thesis error [%] | camdyn, 1 harmonic (thesis method) [%] | camdyn default [%] | "
                  "camdyn default, 1 % noise [%] |", "|---|---|---|---|---|"]
-        xs, ys = [], []
+        data = {"x": [], **{key: [] for key, _, _ in CURVES}}
         for x, thesis in rows:
             label, system, speed = make(x)
             cells, raw = row(label, system, speed, thesis)
             lines.append("| " + " | ".join(cells) + " |")
-            xs.append(x)
-            ys.append((thesis, *[r if isinstance(r, float) else np.nan for r in raw]))
+            data["x"].append(x)
+            for (key, _, _), value in zip(CURVES, (thesis, *raw)):
+                data[key].append(round(value, 6) if isinstance(value, float) else None)
         sections.append("\n".join(lines))
-        series[title] = (xs, np.array(ys))
+        series[title.split(":")[0]] = data
     sections.append(misalignment(base))
     out.mkdir(parents=True, exist_ok=True)
     (out / "friction-errors-tables.md").write_text("\n\n".join(sections) + "\n")
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
-        for ax, (title, (xs, ys)) in zip(axes, series.items()):
-            ax.plot(xs, ys[:, 0], "ks--", label="thesis")
-            ax.plot(xs, np.abs(ys[:, 1]), "o-", label="camdyn, 1 harmonic")
-            ax.plot(xs, np.abs(ys[:, 2]), "^-", label="camdyn, 20 harmonics")
-            ax.plot(xs, np.abs(ys[:, 3]), "v:", label="camdyn, 20 harmonics, 1 % noise")
-            ax.set_yscale("log")
-            ax.set_title(title.split(":")[0])
-            ax.set_xlabel(title.split("against the ")[-1])
-            ax.set_ylabel("|error of mu| [%]")
-            ax.grid(True, which="both", alpha=0.3)
-        axes[0].legend(fontsize=7)
-        fig.tight_layout()
-        (out / "figures").mkdir(exist_ok=True)
-        fig.savefig(out / "figures" / "friction_errors.png", dpi=120)
-    except ImportError:  # pragma: no cover
-        pass
+    draw_errors(series, out / "figures" / "friction_errors.png")
+    if args.data:
+        args.data.write_text(json.dumps({"friction_errors.png": series}, indent=1) + "\n")
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@ the follower angle in degrees, the spectrum's band and peaks, and the committed 
 key numbers (docs/figures/figures.json) recomputed with the current code.
 """
 
+import importlib.util
 import json
 from pathlib import Path
 from types import SimpleNamespace
@@ -37,7 +38,9 @@ def figures(monkeypatch):
         labels = [t for ax in fig.axes for t in (ax.get_xlabel(), ax.get_ylabel(), ax.get_title())]
         markers = [line.get_xydata() for ax in fig.axes for line in ax.get_lines() if line.get_marker() == "v"]
         legends = [t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()]
-        seen.append({"problems": layout_problems(fig), "labels": labels, "xlim": fig.axes[0].get_xlim(),
+        axis_labels = [t for ax in fig.axes for t in (ax.get_xlabel(), ax.get_ylabel()) if t]
+        seen.append({"problems": layout_problems(fig), "labels": labels, "axis_labels": axis_labels,
+                     "xlim": fig.axes[0].get_xlim(),
                      "markers": markers, "legend": legends,
                      "xticks": [t.get_text() for t in fig.axes[-1].get_xticklabels() if t.get_text()]})
 
@@ -377,3 +380,90 @@ def test_the_example_figures_show_what_the_code_computes(record):
     rig = rig.with_values(**{"cam.runout": shown["runout_ratio"] * rig.cam.semi_major})
     srr = contact_conditions(rig, shown["speed_hz"], "agma-4ep", "ground")["slide_to_roll"].values
     np.testing.assert_allclose([srr.min(), srr.max()], shown["slide_to_roll_range"], atol=6e-4)
+
+
+# --- the example scripts' own figures (chapter 2 gallery, friction error tables) ----------
+
+
+def _example(name):
+    """A script of examples/ imported as a module (its ``__main__`` block not run)."""
+    spec = importlib.util.spec_from_file_location(f"camdyn_example_{name}", ROOT / "examples" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def gallery():
+    return _example("chapter2_gallery")
+
+
+def _readable(shown):
+    """No overlapping or clipped text; every axis label a symbol and a unit, angles in degrees."""
+    assert shown["problems"] == []
+    assert shown["axis_labels"] and all(label.endswith("]") and " [" in label for label in shown["axis_labels"])
+    assert not any("[rad]" in label for label in shown["axis_labels"])
+
+
+@pytest.mark.parametrize("key", ["2.4", "2.7", "2.10", "2.14", "2.16"])
+def test_the_chapter2_gallery_figures_are_readable(key, tmp_path, figures, record, gallery):
+    """Each figure drawn as examples/chapter2_gallery.py draws it: figs 2.4 and 2.7-2.8
+    from the numbers recorded in figures.json (their sweeps take ten minutes), the others
+    from their own simulations (about a second each)."""
+    compute, draw = gallery.FIGURES[key]
+    name = gallery.NAMES[key]
+    data = _numbers(record, name) if key in ("2.4", "2.7") else compute()
+    draw(data, tmp_path / name)
+    assert len(figures) == 1
+    _readable(figures[0])
+    if key not in ("2.4", "2.7"):   # the numbers recorded with the committed figure, within 2 %
+        again, shown = _flat(gallery.recorded(data)), _flat(_numbers(record, name))
+        assert again.keys() == shown.keys()
+        for path, value in shown.items():
+            assert again[path] == pytest.approx(value, rel=0.02, abs=1e-9), path
+
+
+def _flat(numbers, prefix=""):
+    """Nested dicts and lists of numbers as ``{"a/b/0": number}``."""
+    items = numbers.items() if isinstance(numbers, dict) else enumerate(numbers)
+    flat = {}
+    for key, value in items:
+        if isinstance(value, (dict, list)):
+            flat.update(_flat(value, f"{prefix}{key}/"))
+        else:
+            flat[f"{prefix}{key}"] = value
+    return flat
+
+
+def test_the_friction_error_figure_is_readable_and_shows_what_the_code_computes(tmp_path, figures, record):
+    """friction_errors.png drawn again from its recorded numbers; one of them (table 4.6 at
+    5 Hz, camdyn's default estimator, noise-free) computed again."""
+    tables = _example("friction_error_tables")
+    shown = _numbers(record, "friction_errors.png")
+    tables.draw_errors(shown, tmp_path / "errors.png")
+    _readable(figures[0])
+    rig = camdyn.load_system("sundar2014-friction").with_values(**{"cam.runout": 0.1 * tables.A})
+    row = shown["Table 4.6"]["x"].index(5)
+    assert tables.error(rig, 5.0, 20, 0.0) == pytest.approx(shown["Table 4.6"]["default_percent"][row], abs=1e-5)
+
+
+def test_the_chapter2_sweep_figures_show_what_the_code_computes(record, gallery, tmp_path):
+    """Figs 2.7-2.8: the energy-balance curves computed again; fig 2.4: the loss-of-contact
+    speed, and model A's residual at its first periodic impacting speed 10 rpm beyond it."""
+    for panel, (start, stop, _, xis) in zip(_numbers(record, "fig2_7_8_energy_balance.png")["panels"],
+                                            gallery.PANELS_2_7_8):
+        again = gallery.energy_balance_curves(start, stop, xis)
+        assert again["speed_rpm"] == pytest.approx(panel["energy_balance"]["speed_rpm"])
+        for xi, values in again["residual_deg"].items():
+            np.testing.assert_allclose(values, panel["energy_balance"]["residual_deg"][xi], rtol=1e-5)
+    shown = _numbers(record, "fig2_4_residual_damping_models.png")
+    from camdyn.analysis.kinematics import loss_of_contact_speed
+    rig = camdyn.load_system("alzate2007-standin-impacting")
+    assert 60 * loss_of_contact_speed(rig) == pytest.approx(shown["loss_of_contact_rpm"], abs=0.01)
+    speeds, model = np.asarray(shown["speed_rpm"]), shown["models"]["A"]
+    i = next(i for i, rpm in enumerate(speeds) if rpm > shown["loss_of_contact_rpm"] + 10 and not model["irregular"][i])
+    speed = f"{float(speeds[i])!r} rpm"
+    ds = gallery.speed_sweep(gallery.IMPACTING, gallery.MODELS["A"], speed, speed, 1, "check", work=tmp_path, workers=0)
+    assert int(ds.regime.values[0]) != 3 and model["residual_peak_to_peak_deg"][i] > 0
+    np.testing.assert_allclose(np.degrees(ds.residual_peak_to_peak.values), [model["residual_peak_to_peak_deg"][i]],
+                               rtol=1e-3)

@@ -15,7 +15,9 @@ Jobs (default: all but the slow ones):
   conditions, Benedict-Kelley;
 - ``restitution``: ``python examples/restitution_laws.py`` -> restitution_laws.png;
 - slow (``--slow``, about 20 minutes more): ``friction_tables``, ``impact_tables`` and
-  ``gallery`` (the rest of chapter 2). These scripts also rewrite their tables in docs/.
+  ``gallery`` (the rest of chapter 2). These scripts also rewrite their tables in docs/;
+  ``friction_tables`` and ``gallery`` record the numbers their figures show (``--data``),
+  from which tests/test_figures.py draws the figures again to check their layout.
 
 tests/test_figures.py recomputes some of the numbers with the current code and checks
 the PNGs against their recorded hashes, so a figure that no longer matches the code, or a
@@ -50,6 +52,7 @@ SOURCES = {
     "design_map_ellipse.png": "python examples/tribology_design.py",
     "contact_conditions.png": "python examples/tribology_design.py",
     "benedict_kelley.png": "python examples/tribology_design.py",
+    "work_precision.png": "make bench-peers (python benchmarks/bench_peers.py)",
     "restitution_laws.png": "python examples/restitution_laws.py",
     "friction_errors.png": "python examples/friction_error_tables.py",
     "impact_hysteresis.png": "python examples/impact_damping_tables.py",
@@ -192,21 +195,25 @@ def job_restitution(work: Path) -> dict:
         law: _number(text, rf"{law}: .*?0\.50: ([-+\d.]+) %") for law in laws}}}
 
 
-def _script(name: str, figures: tuple[str, ...], args: tuple[str, ...] = ()):
+def _script(name: str, figures: tuple[str, ...], args: tuple[str, ...] = (), data: bool = False):
+    """A job that runs ``examples/name``; with ``data``, the script's ``--data FILE`` gives
+    the numbers each figure shows (recorded in figures.json; the tests draw from them)."""
     def job(work: Path) -> dict:
-        run([sys.executable, f"examples/{name}", *args], work)
-        return {figure: {} for figure in figures}
+        numbers = work / f"{Path(name).stem}.json"
+        run([sys.executable, f"examples/{name}", *args, *(("--data", numbers) if data else ())], work)
+        shown = json.loads(numbers.read_text()) if data else {}
+        return {figure: shown.get(figure, {}) for figure in figures}
     job.__doc__ = f"python examples/{name}"
     return job
 
 
 JOBS = {"demo": job_demo, "sweeps": job_sweeps, "fig2_9": job_fig2_9, "tribology": job_tribology,
         "restitution": job_restitution}
-SLOW = {"friction_tables": _script("friction_error_tables.py", ("friction_errors.png",)),
+SLOW = {"friction_tables": _script("friction_error_tables.py", ("friction_errors.png",), data=True),
         "impact_tables": _script("impact_damping_tables.py",
                                  ("impact_hysteresis.png", "impact_residue_landscape.png", "restitution_fit.png")),
         "gallery": _script("chapter2_gallery.py", tuple(k for k, v in SOURCES.items() if v.endswith("gallery.py")),
-                           ("2.4", "2.7", "2.10", "2.14", "2.16"))}
+                           ("2.4", "2.7", "2.10", "2.14", "2.16"), data=True)}
 
 
 def sha256(path: Path) -> str:
