@@ -276,8 +276,8 @@ def summarize(results, revolutions):
         "alpha_true| / max |alpha_true| against a SciPy DOP853 truth at rtol 1e-13) is interpolated in log-log "
         "between the tolerance rungs around the target, on the worst error at that or any tighter rung. The peers "
         "step through contact and friction switches (no events); camdyn locates them. Speed-up: the fastest "
-        "peer's time over camdyn's; camdyn core is its compiled integrator alone (no Dataset, no derived "
-        "channels).", "",
+        "peer's time over camdyn's (below 1: the peer is faster); camdyn core is its compiled integrator alone "
+        "(no Dataset, no derived channels).", "",
         "| case | error | fastest peer | peer [ms/rev] | camdyn simulate() [ms/rev] | speed-up "
         "| camdyn core [ms/rev] | speed-up (core) |",
         "|---|---|---|---|---|---|---|---|"]
