@@ -40,7 +40,7 @@ from camdyn.analysis.linear import linearize  # noqa: E402
 from camdyn.analysis.restitution import energy_balance_residual  # noqa: E402
 from camdyn.analysis.spectra import resonance_peaks, spectrum_summary  # noqa: E402
 from camdyn.plotting import plot_regime_map  # noqa: E402
-from camdyn.plotting.style import axis_label, save_figure, styled, tidy_axis  # noqa: E402
+from camdyn.plotting.style import axis_label, legend_below, save_figure, styled, tidy_axis  # noqa: E402
 from camdyn.sweeps import run_sweep, spec_from_dict  # noqa: E402
 from camdyn.sweeps.regime_map import regime_map  # noqa: E402
 
@@ -141,8 +141,7 @@ def draw_2_4(data: dict, path) -> Path:
     axes[1].set_ylabel(axis_label(r"$\alpha_r$ p-p", "deg"))
     axes[1].set_xlabel(RPM)
     tidy_axis(axes[1].xaxis, 8)
-    handles, labels = axes[1].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncols=4)
+    legend_below(fig, axes[1], 4)
     fig.align_ylabels(axes)
     fig.suptitle("fig 2.4: residual response $\\alpha_r$, damping models A-E (impacting stand-in)")
     return save_figure(fig, path)
@@ -276,8 +275,7 @@ def draw_2_10_11(data: dict, path) -> Path:
     axes[0].set_title("fig 2.10a: cam harmonics")
     axes[1].set_title("fig 2.10b: contact resonance (peaks ▼)")
     axes[2].set_title("fig 2.11: normal force over a revolution")
-    handles, labels = axes[1].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncols=3)
+    legend_below(fig, axes[1], 3)
     fig.suptitle("friction direction and contact model, sliding stand-in at 300 rpm")
     return save_figure(fig, path)
 
@@ -373,8 +371,7 @@ def draw_2_16(data: dict, path) -> Path:
         tidy_axis(ax.xaxis, 7)
     axes[0].set_title("fig 2.16a: the linear model has no super-harmonics")
     axes[1].set_title("fig 2.16b: near the natural frequency")
-    handles, labels = axes[1].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncols=3)
+    legend_below(fig, axes[1], 3)
     fig.suptitle("linearized against nonlinear model, sliding stand-in at 300 rpm")
     return save_figure(fig, path)
 

@@ -28,7 +28,7 @@ import numpy as np  # noqa: E402
 import camdyn  # noqa: E402
 from camdyn.errors import CamdynError  # noqa: E402
 from camdyn.identification.friction import estimate_friction  # noqa: E402
-from camdyn.plotting.style import axis_label, save_figure, styled, tidy_axis  # noqa: E402
+from camdyn.plotting.style import axis_label, legend_below, save_figure, styled, tidy_axis  # noqa: E402
 from camdyn.records.synthesis import synthesize  # noqa: E402
 
 MU = 0.3
@@ -112,8 +112,7 @@ def draw_errors(series: dict, path) -> Path:
         ax.grid(True, which="major", alpha=0.3)
         tidy_axis(ax.xaxis, 6)
     axes[0].set_ylabel(axis_label(r"$|\Delta\mu/\mu|$", "%"))
-    handles, labels = axes[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncols=4)
+    legend_below(fig, axes[0], 4)
     fig.suptitle(r"error of the friction estimate, $\mu$ = 0.3 (a missing point: record refused)")
     return save_figure(fig, path)
 

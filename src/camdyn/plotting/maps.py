@@ -10,7 +10,16 @@ import numpy as np
 import xarray as xr
 from matplotlib.colors import ListedColormap
 
-from camdyn.plotting.style import SYMBOLS, axis_label, display_scale, display_values, save_figure, styled, tidy_axis
+from camdyn.plotting.style import (
+    SYMBOLS,
+    axis_label,
+    display_scale,
+    display_values,
+    legend_below,
+    save_figure,
+    styled,
+    tidy_axis,
+)
 
 __all__ = ["METRIC_SYMBOLS", "coordinate_label", "plot_sweep", "plot_regime_map", "plot_design_map"]
 
@@ -113,7 +122,7 @@ def plot_sweep(ds: xr.Dataset, path: str | Path) -> Path:
         tidy_axis(ax.xaxis, 6)
         tidy_axis(ax.yaxis, 6)
     if "regime" in names:
-        fig.legend(loc="outside lower center", ncol=5, handles=axes[0, 0].get_legend_handles_labels()[0])
+        legend_below(fig, axes[0, 0], 5)
     return save_figure(fig, path)
 
 

@@ -31,8 +31,8 @@ from camdyn.errors import OutputError  # noqa: E402
 from camdyn.io.atomic import atomic_output  # noqa: E402
 
 __all__ = ["STYLE", "DPI", "SAVE_HOOKS", "SYMBOLS", "styled", "figure_style", "figure_format", "save_figure",
-           "unit_text", "display_scale", "display_values", "engineering", "speed_text", "axis_label", "tidy_axis",
-           "layout_problems"]
+           "legend_below", "unit_text", "display_scale", "display_values", "engineering", "speed_text", "axis_label",
+           "tidy_axis", "layout_problems"]
 
 #: matplotlib settings of every camdyn figure
 STYLE = {
@@ -122,6 +122,13 @@ def save_figure(fig, path: str | Path) -> Path:
     finally:
         plt.close(fig)
     return path
+
+
+def legend_below(fig, ax, ncols: int) -> None:
+    """One legend for the whole figure, below its panels, of the labelled artists of
+    ``ax`` in ``ncols`` columns (the figure needs a constrained layout)."""
+    handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=ncols)
 
 
 def unit_text(unit: str) -> str:
