@@ -26,31 +26,31 @@ def run() -> None:
         from camdyn.cli.app import main
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
-        _leave(128 + int(arrived.get("signal", signal.SIGINT)))
+        _leave_at_once(128 + int(arrived.get("signal", signal.SIGINT)))
     try:
         status = main()
     except KeyboardInterrupt:   # arrived as main() returned, after it put ``stop`` back
         print("interrupted", file=sys.stderr)
         status = 128 + int(arrived.get("signal", signal.SIGINT))
     _ignore_late_signals()
-    _leave(status)
-
-
-def _leave(status: int) -> None:
-    """Exit with ``status``; after an interrupt (130, 143), at once.
-
-    An interrupted command has already stopped its workers and kept its checkpoints, so
-    nothing is left to clean up; leaving at once (``os._exit`` after flushing the
-    standard streams) also keeps CPython from turning the exit into a death by SIGINT
-    (status -2, no message), which it did in 3 of 14 tries of Ctrl-C during the imports
-    (once seen with the interrupt inside a dataclass that the standard library was
-    creating through ``exec``; the path inside CPython was not pinned down).
-    """
-    if status in (128 + signal.SIGINT, 128 + signal.SIGTERM):
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(status)
     sys.exit(status)
+
+
+def _leave_at_once(status: int) -> None:
+    """Exit with ``status`` at once, after an interrupt during the imports.
+
+    Nothing has started yet, so nothing is left to clean up; leaving at once
+    (``os._exit`` after flushing the standard streams) keeps CPython from turning the
+    exit into a death by SIGINT (status -2, no message), which it did in 3 of 14 tries of
+    Ctrl-C during the imports (once seen with the interrupt inside a dataclass that the
+    standard library was creating through ``exec``; the path inside CPython was not
+    pinned down). After ``main()`` the exit is a normal one: an interrupted sweep's pool
+    still has semaphores that multiprocessing's exit handlers release, and skipping them
+    makes its resource tracker print leaked-semaphore warnings after the one line.
+    """
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status)
 
 
 def _ignore_late_signals() -> None:
