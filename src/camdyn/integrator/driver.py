@@ -97,6 +97,12 @@ MODE_SIZE = 5
 EVENT_RETRY_ABOVE = 0.01
 EVENT_RETRY_BELOW = 0.999
 EVENT_RETRY_MARGIN = 1e-6
+#: Retaken steps in a row that may lose their crossing before the retakes stop until the
+#: next event [-].
+EVENT_RETRY_LOST = 2
+#: The shortest step after an event, and the shortest retaken step, as a fraction of
+#: the regime's last step [-].
+EVENT_STEP_FLOOR = 1e-3
 NG = systems.N_GUARDS
 
 
@@ -312,9 +318,11 @@ def _restart(system, t, h, tau_event, y, f, g, gr, mode, p, h_regime, counters):
     monitor_max : float
         The monitored quantity at ``t``.
     h : float
-        The next trial step [s]: the cut step, at least a tenth of the last, and no
-        longer than the new regime's last step (a contact is far faster than free
-        flight).
+        The next trial step [s]: the cut step, at least a tenth of the last, and between
+        :data:`EVENT_STEP_FLOOR` times and once the new regime's last step (a contact is
+        far faster than free flight; the floor keeps a guard that chatters on rounding
+        noise, events a picosecond apart, from shrinking the step tenfold per event
+        until it underflows: a longer step still cuts at its first crossing).
     """
     systems.rhs(system, t, y, mode, p, f)
     counters[COUNT_RHS] += 1
@@ -323,7 +331,7 @@ def _restart(system, t, h, tau_event, y, f, g, gr, mode, p, h_regime, counters):
     h = max(h * tau_event, h * 0.1) if tau_event > 0.0 else h
     r_new = systems.regime(system, mode, p)
     if h_regime[r_new] > 0.0:
-        h = min(h, h_regime[r_new])
+        h = min(max(h, EVENT_STEP_FLOOR * h_regime[r_new]), h_regime[r_new])
     return monitor_max, h
 
 
@@ -365,19 +373,39 @@ def _advance(system, t, h, t_stop, e, order, y, f, y1, f1, dwork, kind, mode, p,
 
 
 @numba.njit(cache=True, inline="always")
-def _retake(k_event, tau_event, h, retried, counters):
+def _retake(system, mode, p, h_regime, k_event, tau_event, h, retaking, lost, counters):
     """Whether to take the step again so that it ends just past its event, and the step
     [s] to take: its end state then carries the step's own error control, not the
     interpolant's (unestimated) error, which is large where the step straddles a point
     at which the mode's right-hand side is not smooth (a Hertz force |delta|^1.5 at
-    separation). Not twice in a row, nor for an event near the step's start, where the
-    interpolant is as accurate as the state it starts from; a retaken step counts as
-    rejected."""
-    if k_event >= 0 and EVENT_RETRY_ABOVE < tau_event < EVENT_RETRY_BELOW and not retried:
+    separation). Not twice in a row (``retaking``: this step is the retaken one), nor for
+    an event near the step's start, where the interpolant is as accurate as the state it
+    starts from; nor when the retaken step would be shorter than
+    :data:`EVENT_STEP_FLOOR` times the regime's last step (a crossing that close is
+    rounding noise or a restart's neighbour). A retaken step counts as rejected.
+
+    A retaken step can lose the crossing: a guard that grazes zero moves its crossing
+    with the step. ``lost`` counts such steps since the last event; after
+    :data:`EVENT_RETRY_LOST` of them the crossing is taken from the interpolant until the
+    next event, since each retake of a receding crossing shrinks the step by the
+    fraction ``tau_event`` and a sequence of them would end in a vanishing step.
+
+    Returns
+    -------
+    h : float
+        The step to take next [s].
+    retake : bool
+    lost : int
+    """
+    if retaking:
+        return h, False, lost + 1 if k_event < 0 else 0
+    floor = EVENT_STEP_FLOOR * h_regime[systems.regime(system, mode, p)]
+    if (k_event >= 0 and EVENT_RETRY_ABOVE < tau_event < EVENT_RETRY_BELOW and lost < EVENT_RETRY_LOST
+            and tau_event * h > floor):
         counters[COUNT_ACCEPTED] -= 1
         counters[COUNT_REJECTED] += 1
-        return h * tau_event * (1.0 + EVENT_RETRY_MARGIN), True
-    return h, False
+        return h * tau_event * (1.0 + EVENT_RETRY_MARGIN), True, lost
+    return h, False, 0 if k_event >= 0 else lost
 
 
 @numba.njit(cache=True, pipeline_class=InlinedPipeline)
@@ -437,6 +465,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     last_event_t = -math.inf
     zeno = 0
     retried = False
+    lost = 0
     while t < t_end:
         h, last, stop = _next_step(t, h, h_max, t_end, max_steps, counters)
         if stop:
@@ -459,7 +488,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
                                 gv, grv, ready, counters)
         tau_event, k_event, ready = earliest_crossing(system, t, h, y, f, y1, f1, dwork, kind, mode, p, k16, ytmp,
                                                       f7, g, gr, g1, gr1, gv, pts, g_tmp, gr_tmp, ready, counters)
-        h, retried = _retake(k_event, tau_event, h, retried, counters)
+        h, retried, lost = _retake(system, mode, p, h_regime, k_event, tau_event, h, retried, lost, counters)
         if k_event >= 0 and not retried:
             t_new, i_out, monitor_max = _cut_at_event(system, tau_event, t, h, y, f, y1, f1, dwork, kind, mode, p,
                                                       ytmp, yo, g, gr, t_out, i_out, y_out, mode_out, monitor_max)
