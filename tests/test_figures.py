@@ -382,7 +382,7 @@ def test_the_example_figures_show_what_the_code_computes(record):
     np.testing.assert_allclose([srr.min(), srr.max()], shown["slide_to_roll_range"], atol=6e-4)
 
 
-# --- the example scripts' own figures (chapter 2 gallery, friction error tables) ----------
+# --- the example scripts' own figures (chapter 2 gallery, tables, tribology, restitution) -
 
 
 def _example(name):
@@ -467,3 +467,34 @@ def test_the_chapter2_sweep_figures_show_what_the_code_computes(record, gallery,
     assert int(ds.regime.values[0]) != 3 and model["residual_peak_to_peak_deg"][i] > 0
     np.testing.assert_allclose(np.degrees(ds.residual_peak_to_peak.values), [model["residual_peak_to_peak_deg"][i]],
                                rtol=1e-3)
+
+
+def test_the_restitution_figure_is_readable_and_shows_what_the_code_computes(tmp_path, figures, record):
+    """restitution_laws.png drawn again from docs/figures/restitution_laws.json; each law's
+    error at e = 0.5 (one impact each) computed again, as both records give it."""
+    laws = _example("restitution_laws")
+    shown = json.loads((FIGURES / "restitution_laws.json").read_text())
+    laws.draw_restitution_laws(shown, tmp_path / "laws.png")
+    _readable(figures[0])
+    again = laws.data_restitution_laws(values=[0.5])
+    for law, percent in _numbers(record, "restitution_laws.png")["error_percent_at_0.5"].items():
+        error = again[law]["relative_error"][0]
+        recorded = shown[law]["relative_error"][shown[law]["e"].index(0.5)]
+        assert recorded == pytest.approx(error, rel=1e-6) and 100 * error == pytest.approx(percent, abs=0.05)
+
+
+@pytest.mark.parametrize("name", ["design_map_circle.png", "design_map_ellipse.png", "contact_conditions.png",
+                                  "benedict_kelley.png"])
+def test_the_tribology_figures_are_readable(name, tmp_path, figures, record):
+    """Each figure drawn as examples/tribology_design.py draws it: the design maps on coarse
+    grids, Benedict-Kelley from the numbers recorded in figures.json, which the code
+    computes again (the contact conditions take a second)."""
+    tribology = _example("tribology_design")
+    compute, draw = tribology.FIGURES[name]
+    coarse = {"ratios": 6, "speeds": 8} if name.startswith("design") else {}
+    data = _numbers(record, name) if name == "benedict_kelley.png" else compute(**coarse)
+    draw(data, tmp_path / name)
+    assert len(figures) == 1
+    _readable(figures[0])
+    if name == "benedict_kelley.png":
+        assert _flat(compute()) == pytest.approx(_flat(data), rel=1e-4)

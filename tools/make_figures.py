@@ -15,9 +15,11 @@ Jobs (default: all but the slow ones):
   conditions, Benedict-Kelley;
 - ``restitution``: ``python examples/restitution_laws.py`` -> restitution_laws.png;
 - slow (``--slow``, about 20 minutes more): ``friction_tables``, ``impact_tables`` and
-  ``gallery`` (the rest of chapter 2). These scripts also rewrite their tables in docs/;
-  ``friction_tables`` and ``gallery`` record the numbers their figures show (``--data``),
-  from which tests/test_figures.py draws the figures again to check their layout.
+  ``gallery`` (the rest of chapter 2). These scripts also rewrite their tables in docs/.
+
+``tribology``, ``friction_tables`` and ``gallery`` record the numbers their figures show
+(``--data``), and restitution_laws.py writes its curves to docs/figures/restitution_laws.json;
+tests/test_figures.py draws those figures again from these numbers to check their layout.
 
 tests/test_figures.py recomputes some of the numbers with the current code and checks
 the PNGs against their recorded hashes, so a figure that no longer matches the code, or a
@@ -171,22 +173,6 @@ def job_fig2_9(work: Path) -> dict:
                                           _number(text, r"ks = 2000 N/m: (\d+) rpm")}}
 
 
-def job_tribology(work: Path) -> dict:
-    """Design maps, contact conditions and Benedict-Kelley (examples/tribology_design.py)."""
-    text = run([sys.executable, "examples/tribology_design.py"], work)
-    return {"design_map_circle.png": {"recommended_ratio": _number(text, r"recommended e/a = ([\d.]+)"),
-                                      "recommended_speed_hz": _number(text, r"e/a = [\d.]+ at ([\d.]+) Hz"),
-                                      "admissible_points": _number(text, r"admissible points (\d+)")},
-            "design_map_ellipse.png": {"recommended_ratio": _number(text, r"recommended b/a = ([\d.]+)"),
-                                       "recommended_speed_hz": _number(text, r"b/a = [\d.]+ at ([\d.]+) Hz")},
-            "contact_conditions.png": {"runout_ratio": 0.116, "speed_hz": 11.55,
-                                       "slide_to_roll_range": [_number(text, r"slide-to-roll ([\d.]+) to"),
-                                                               _number(text, r"slide-to-roll [\d.]+ to ([\d.]+)")],
-                                       "lambda_range": [_number(text, r"lambda ([\d.]+) to"),
-                                                        _number(text, r"lambda [\d.]+ to ([\d.]+)")]},
-            "benedict_kelley.png": {"mean_pressure_GPa": _number(text, r"<p> = ([\d.]+) GPa")}}
-
-
 def job_restitution(work: Path) -> dict:
     """Restitution-parameterised laws against their promise (examples/restitution_laws.py)."""
     text = run([sys.executable, "examples/restitution_laws.py"], work)
@@ -207,7 +193,9 @@ def _script(name: str, figures: tuple[str, ...], args: tuple[str, ...] = (), dat
     return job
 
 
-JOBS = {"demo": job_demo, "sweeps": job_sweeps, "fig2_9": job_fig2_9, "tribology": job_tribology,
+JOBS = {"demo": job_demo, "sweeps": job_sweeps, "fig2_9": job_fig2_9,
+        "tribology": _script("tribology_design.py", tuple(k for k, v in SOURCES.items() if v.endswith("design.py")),
+                             data=True),
         "restitution": job_restitution}
 SLOW = {"friction_tables": _script("friction_error_tables.py", ("friction_errors.png",), data=True),
         "impact_tables": _script("impact_damping_tables.py",

@@ -15,6 +15,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
+from camdyn.plotting.style import axis_label, figure_style, tidy_axis
 from camdyn.sweeps import run_sweep, spec_from_dict
 
 folder = Path(tempfile.mkdtemp())
@@ -31,16 +32,18 @@ ds = run_sweep(spec, workers=0, progress=False).load()
 # Period 1 (one impact per revolution, a single Poincare point) up to about 16 Hz, then
 # period doubling into an irregular band near 18 Hz.
 
-speed = ds["motion.speed"].values
-alpha = np.degrees(ds["poincare_alpha"].values)  # (speed, revolution)
-fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
-ax1.plot(np.repeat(speed, alpha.shape[1]), alpha.ravel(), ".", ms=2, color="k")
-ax1.set_ylabel("alpha once per revolution [deg]")
-ax2.plot(speed, ds["impacts_per_revolution"].values, "o-", ms=4)
-ax2.set_ylabel("impacts per revolution")
-ax2.set_xlabel("cam speed [Hz]")
-ax1.set_title("sundar2014-impact, e = 3.5 mm: bifurcation diagram")
-fig.tight_layout()
+speed = ds["motion.speed"].values  # [Hz]
+alpha = np.degrees(ds["poincare_alpha"].values)  # [deg], (speed, revolution)
+with figure_style():
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
+    ax1.plot(np.repeat(speed, alpha.shape[1]), alpha.ravel(), ".", ms=2, color="k")
+    ax1.set_ylabel(axis_label(r"$\alpha$ once per revolution", "deg"))
+    ax2.plot(speed, ds["impacts_per_revolution"].values, "o-", ms=4)
+    ax2.set_ylabel(axis_label("impacts", ds["impacts_per_revolution"].attrs["units"]))
+    ax2.set_xlabel(axis_label(r"cam speed $\Omega$", "Hz"))
+    tidy_axis(ax2.yaxis, 5, integer=True)
+    ax1.set_title("sundar2014-impact, e = 3.5 mm: bifurcation diagram")
+    fig.align_ylabels((ax1, ax2))
 
 # %%
 # The regime of each speed as the sweep classifies it (the metrics are defined in

@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import camdyn
+from camdyn.plotting.style import axis_label, figure_style
 
 runouts = np.linspace(0.5, 8.0, 16)  # [mm]
 angle, force, frequency = [], [], []
@@ -24,13 +25,16 @@ for e in runouts:
 
 # %%
 
-fig, axes = plt.subplots(3, 1, figsize=(7, 7), sharex=True)
-for ax, values, label in zip(axes, (angle, force, frequency),
-                             ("equilibrium angle [deg]", "contact force [N]", "natural frequency [Hz]")):
-    ax.plot(runouts, values, "o-", ms=4)
-    ax.set_ylabel(label)
-axes[-1].set_xlabel("cam runout e [mm]")
-axes[0].set_title("sundar2014-friction: static equilibrium against the runout")
-fig.tight_layout()
+labels = (axis_label(r"equilibrium angle $\alpha^*$", "deg"), axis_label("contact force $F_n$", "N"),
+          axis_label("natural frequency $f_n$", "Hz"))
+with figure_style():
+    fig, axes = plt.subplots(3, 1, figsize=(7, 7), sharex=True)
+    for ax, values, label in zip(axes, (angle, force, frequency), labels):
+        ax.plot(runouts, values, "o-", ms=4)
+        ax.set_ylabel(label)
+    axes[0].ticklabel_format(axis="y", useOffset=False)  # the angle changes in its fifth digit
+    axes[-1].set_xlabel(axis_label("cam runout $e$", "mm"))
+    axes[0].set_title("sundar2014-friction: static equilibrium against the runout")
+    fig.align_ylabels(axes)
 
 print(f"e = {runouts[0]:.1f} mm: {frequency[0]:.1f} Hz; e = {runouts[-1]:.1f} mm: {frequency[-1]:.1f} Hz")

@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt
 
 import camdyn
 from camdyn.identification.friction import estimate_friction
+from camdyn.plotting.style import axis_label, figure_style
 from camdyn.records.synthesis import synthesize
 
 rig = camdyn.load_system("sundar2014-friction", {"friction.coefficient": 0.3})
@@ -27,10 +28,12 @@ for name, check in estimate.checks.items():
 # The record the estimator sees: two revolutions of each channel.
 
 window = record.sel(time=slice(float(record.time[0]), float(record.time[0]) + 2 / 11.55))
-fig, axes = plt.subplots(3, 1, figsize=(8, 6), sharex=True)
-for ax, name in zip(axes, ("Nx", "Ny", "alpha_ddot")):
-    ax.plot(1e3 * window["time"].values, window[name].values, lw=0.7)
-    ax.set_ylabel(f"{name} [{record[name].attrs.get('units', '-')}]")
-axes[-1].set_xlabel("time [ms]")
-axes[0].set_title(f"synthetic record, 1 % noise: mu estimated {estimate.mu:.4f}")
-fig.tight_layout()
+symbols = {"Nx": "pivot reaction $N_x$", "Ny": "pivot reaction $N_y$", "alpha_ddot": r"$\ddot\alpha$"}
+with figure_style():
+    fig, axes = plt.subplots(3, 1, figsize=(8, 6), sharex=True)
+    for ax, (name, symbol) in zip(axes, symbols.items()):
+        ax.plot(1e3 * window["time"].values, window[name].values, lw=0.7)
+        ax.set_ylabel(axis_label(symbol, record[name].attrs.get("units", "")))
+    axes[-1].set_xlabel(axis_label("time $t$", "ms"))
+    axes[0].set_title(rf"synthetic record, 1 % noise: $\mu$ estimated {estimate.mu:.4f}")
+    fig.align_ylabels(axes)

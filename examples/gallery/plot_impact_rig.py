@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import camdyn
+from camdyn.plotting.style import axis_label, figure_style
 
 rig = camdyn.load_system("sundar2014-impact")
 ds = camdyn.simulate(rig, speed="16 Hz", revolutions=40)
@@ -24,18 +25,19 @@ last = ds.sel(time=slice(float(ds.time[-1]) - 2 / 16.0, None))
 impacts = ds["impact_time"].values
 impacts = impacts[impacts >= float(last.time[0])]
 
-fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
 t_ms = 1e3 * last["time"].values
-ax1.plot(t_ms, np.degrees(last["alpha"].values))
-ax1.set_ylabel("follower angle alpha [deg]")
-ax2.plot(t_ms, last["Fn"].values, color="C3")
-ax2.set_ylabel(f"{last['Fn'].attrs['long_name']} [{last['Fn'].attrs['units']}]")
-ax2.set_xlabel("time [ms]")
-for ax in (ax1, ax2):
-    for t in impacts:
-        ax.axvline(1e3 * t, color="0.6", lw=0.6)
-fig.suptitle("sundar2014-impact, e/rc = 0.2, 16 Hz")
-fig.tight_layout()
+with figure_style():
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
+    ax1.plot(t_ms, np.degrees(last["alpha"].values))
+    ax1.set_ylabel(axis_label(r"follower angle $\alpha$", "deg"))
+    ax2.plot(t_ms, last["Fn"].values, color="C3")
+    ax2.set_ylabel(axis_label("normal contact force $F_n$", last["Fn"].attrs["units"]))
+    ax2.set_xlabel(axis_label("time $t$", "ms"))
+    for ax in (ax1, ax2):
+        for t in impacts:
+            ax.axvline(1e3 * t, color="0.6", lw=0.6)
+    fig.suptitle("sundar2014-impact, e/rc = 0.2, 16 Hz")
+    fig.align_ylabels((ax1, ax2))
 
 # %%
 # The impact table: one row per located impact. After the start-up transient the motion

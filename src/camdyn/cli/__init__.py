@@ -13,6 +13,7 @@ import sys
 
 def run() -> None:
     """Console-script entry point: ``sys.exit(camdyn.cli.app.main())``."""
+    os.environ.setdefault("MPLBACKEND", "Agg")   # figures are written to files, never shown
     arrived = {}
 
     def stop(signum, frame):

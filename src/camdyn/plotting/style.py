@@ -9,6 +9,10 @@ degrees.
 
 :func:`layout_problems` lists text that overlaps other text or leaves the figure; the
 tests run it on every figure (through :data:`SAVE_HOOKS`).
+
+Importing camdyn's plotting leaves matplotlib's backend alone (a window, a notebook's
+inline figures); the command line draws off screen (``MPLBACKEND=Agg``, set by
+:func:`camdyn.cli.run` unless the user set it).
 """
 
 from __future__ import annotations
@@ -17,18 +21,15 @@ import functools
 import math
 from pathlib import Path
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from matplotlib.backend_bases import FigureCanvasBase
+from matplotlib.text import Text
+from matplotlib.ticker import MaxNLocator
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import xarray as xr  # noqa: E402
-from matplotlib.backend_bases import FigureCanvasBase  # noqa: E402
-from matplotlib.text import Text  # noqa: E402
-from matplotlib.ticker import MaxNLocator  # noqa: E402
-
-from camdyn.errors import OutputError  # noqa: E402
-from camdyn.io.atomic import atomic_output  # noqa: E402
+from camdyn.errors import OutputError
+from camdyn.io.atomic import atomic_output
 
 __all__ = ["STYLE", "DPI", "SAVE_HOOKS", "SYMBOLS", "styled", "figure_style", "figure_format", "save_figure",
            "legend_below", "unit_text", "display_scale", "display_values", "engineering", "speed_text", "axis_label",
