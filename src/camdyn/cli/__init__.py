@@ -6,6 +6,7 @@ that Ctrl-C or SIGTERM during start-up also ends in one line and exit status 130
 not in a traceback; :func:`camdyn.cli.app.main` then takes over.
 """
 
+import atexit
 import os
 import signal
 import sys
@@ -27,31 +28,38 @@ def run() -> None:
         from camdyn.cli.app import main
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
-        _leave_at_once(128 + int(arrived.get("signal", signal.SIGINT)))
+        _leave(128 + int(arrived.get("signal", signal.SIGINT)))
     try:
         status = main()
     except KeyboardInterrupt:   # arrived as main() returned, after it put ``stop`` back
         print("interrupted", file=sys.stderr)
         status = 128 + int(arrived.get("signal", signal.SIGINT))
     _ignore_late_signals()
-    sys.exit(status)
+    _leave(status)
 
 
-def _leave_at_once(status: int) -> None:
-    """Exit with ``status`` at once, after an interrupt during the imports.
+def _leave(status: int) -> None:
+    """Exit with ``status``; after an interrupt (130, 143), without the interpreter's
+    finalization.
 
-    Nothing has started yet, so nothing is left to clean up; leaving at once
-    (``os._exit`` after flushing the standard streams) keeps CPython from turning the
-    exit into a death by SIGINT (status -2, no message), which it did in 3 of 14 tries of
-    Ctrl-C during the imports (once seen with the interrupt inside a dataclass that the
-    standard library was creating through ``exec``; the path inside CPython was not
-    pinned down). After ``main()`` the exit is a normal one: an interrupted sweep's pool
-    still has semaphores that multiprocessing's exit handlers release, and skipping them
-    makes its resource tracker print leaked-semaphore warnings after the one line.
+    An interrupted command has stopped its workers and kept its checkpoints. Its exit
+    handlers still run (``atexit``: multiprocessing's releases an interrupted sweep's
+    pool semaphores, whose resource tracker would otherwise print leaked-semaphore
+    warnings after the one line), then the streams are flushed and the process leaves by
+    ``os._exit``. A normal exit was turned by CPython into a death by SIGINT (status -2,
+    no message) in 3 of 14 tries of Ctrl-C during the imports, and once in a full test
+    run after ``main()`` had returned 130 (the path inside CPython was not pinned down).
     """
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(status)
+    if status in (128 + signal.SIGINT, 128 + signal.SIGTERM):
+        _ignore_late_signals()
+        try:
+            atexit._run_exitfuncs()   # what a normal exit runs first; private but stable
+        except BaseException:   # noqa: BLE001 - leaving anyway, with the status already decided
+            pass
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(status)
+    sys.exit(status)
 
 
 def _ignore_late_signals() -> None:
