@@ -25,7 +25,7 @@ def exact(t, y0, v0):
 
 def fixed_step_error(stepper, n):
     p = np.array([W0, ZETA, AMP, WF, 0.0])
-    mode = np.zeros(driver.MODE_SIZE)
+    mode = np.zeros(5)
     y = np.array([1.0, 0.0, 0.0])
     f = np.empty(3)
     f1 = np.empty(3)
@@ -38,7 +38,8 @@ def fixed_step_error(stepper, n):
         if stepper == "dp":
             dormand_prince_step(systems.OSCILLATOR, t, y, f, h, mode, p, np.empty((6, 3)), y1, f1, err)
         else:
-            rosenbrock_step(systems.OSCILLATOR, t, y, f, h, mode, p, np.empty((6, 3)), np.empty((6, 3)), y1, err)
+            rosenbrock_step(systems.OSCILLATOR, t, y, f, h, mode, p, np.empty((6, 3)), np.empty((6, 3)),
+                            np.empty((3, 3)), np.empty(3, dtype=np.int64), y1, err)
             systems.rhs(systems.OSCILLATOR, t + h, y1, mode, p, f1)
         y[:] = y1
         f[:] = f1
@@ -108,7 +109,7 @@ def test_dense_output_is_fourth_order():
     # interpolant would only give 2^4); on this linear problem it does better still
     from camdyn.integrator.steppers import dense
     p = np.array([W0, ZETA, AMP, WF, 0.0])
-    mode = np.zeros(driver.MODE_SIZE)
+    mode = np.zeros(5)
     errs = []
     for h in (0.8, 0.4, 0.2):
         y = np.array([1.0, 0.0, 0.0])

@@ -19,15 +19,13 @@ from camdyn.integrator.counters import COUNT_RHS, COUNT_ROOT_ITERATIONS
 from camdyn.integrator.steppers import dense, dop853_extend
 from camdyn.systems import registry as systems
 
-NG = systems.N_GUARDS
-
 
 @numba.njit(cache=True)
 def guard_at(system, t, h, tau, y0, f0, y1, f1, work, kind, p, ytmp, vals, rates):
     """Guards ``vals`` (and their rates, ``rates``) at the fraction ``tau`` of the step of
     ``h`` [s] from ``t`` [s], on the step's continuous extension."""
     dense(tau, h, y0, f0, y1, f1, work, kind, ytmp)
-    systems.guards(system, t + tau * h, ytmp, math.nan, p, vals, rates)
+    systems.guards(system, t + tau * h, ytmp, ytmp, False, p, vals, rates)
 
 
 @numba.njit(cache=True)
@@ -79,15 +77,15 @@ def midpoint_guards(system, t, h, y, f, y1, f1, dwork, kind, mode, p, k16, ytmp,
     """Guards ``gv`` at the step's midpoint when an active guard has no rate at an end
     (else zeros, unused); returns whether the continuous extension is ready."""
     need_mid = False
-    for k in range(NG):
+    for k in range(gr.shape[0]):
         if systems.expected_sign(system, k, mode, p) != 0.0 and (math.isnan(gr[k]) or math.isnan(gr1[k])):
             need_mid = True
     if need_mid:
         ready = ensure_extension(ready, system, t, y, h, y1, f1, mode, p, k16, ytmp, f7, counters)
         dense(0.5, h, y, f, y1, f1, dwork, kind, ymid)
-        systems.guards(system, t + 0.5 * h, ymid, math.nan, p, gv, grv)
+        systems.guards(system, t + 0.5 * h, ymid, ymid, False, p, gv, grv)
     else:
-        for k in range(NG):
+        for k in range(gv.shape[0]):
             gv[k] = 0.0   # not used: every active guard has its cubic
     return ready
 
@@ -187,7 +185,7 @@ def earliest_crossing(system, t, h, y, f, y1, f1, dwork, kind, mode, p, k16, ytm
     """
     tau_event = 2.0
     k_event = -1
-    for k in range(NG):
+    for k in range(g.shape[0]):
         s = systems.expected_sign(system, k, mode, p)
         if s == 0.0:
             continue

@@ -21,7 +21,8 @@ Algorithm (per accepted step from ``t`` to ``t + h``):
 
 Counters (``COUNT_*``, :mod:`camdyn.integrator.counters`) record accepted and rejected
 steps, right-hand-side calls, Jacobians, steps per method, events and root-finding
-iterations, and the status. Steps 3-4 are :mod:`camdyn.integrator.crossings`; each of
+iterations, and the status. Steps 3-4 are :mod:`camdyn.integrator.crossings` (the crossing)
+and :mod:`camdyn.integrator.events` (retake, cut, log, restart); each of
 the other steps of the loop is one function of this module, compiled into ``integrate``
 (numba IR inlining, :mod:`camdyn.integrator.inlining`).
 """
@@ -55,13 +56,30 @@ from camdyn.integrator.counters import (
     STATUS_ZENO,
 )
 from camdyn.integrator.crossings import earliest_crossing, ensure_extension, midpoint_guards
+from camdyn.integrator.events import (
+    EVENT_GUARD,
+    EVENT_GUARDS,
+    EVENT_MONITOR,
+    EVENT_NEW_SIGN,
+    EVENT_RETRY_ABOVE,
+    EVENT_RETRY_BELOW,
+    EVENT_RETRY_LOST,
+    EVENT_RETRY_MARGIN,
+    EVENT_STEP_FLOOR,
+    EVENT_TIME,
+    cut_at_event,
+    event_columns,
+    log_event,
+    restart,
+    retake,
+)
 from camdyn.integrator.inlining import InlinedPipeline
 from camdyn.integrator.interrupt import POLL_STEPS, interrupted
+from camdyn.integrator.sampling import sample
 from camdyn.integrator.steppers import (
     KIND_DOP853,
     KIND_DP5,
     KIND_HERMITE,
-    dense,
     dop853_error_norm,
     dop853_step,
     dormand_prince_step,
@@ -75,7 +93,9 @@ __all__ = [
     "COUNT_ROSENBROCK", "COUNT_EVENTS", "COUNT_ROOT_ITERATIONS", "COUNT_STATUS", "COUNT_EVENTS_DROPPED",
     "COUNT_SIZE", "COUNTER_NAMES", "STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW",
     "STATUS_NOT_FINITE", "STATUS_ZENO", "STATUS_INTERRUPTED", "STATUS_MESSAGES", "METHOD_AUTO", "METHOD_EXPLICIT",
-    "METHOD_ROSENBROCK", "METHOD_DOP853", "EVENT_COLUMNS", "N_EVENT_COLUMNS", "MODE_SIZE",
+    "METHOD_ROSENBROCK", "METHOD_DOP853", "EVENT_TIME", "EVENT_GUARD", "EVENT_NEW_SIGN", "EVENT_MONITOR",
+    "EVENT_GUARDS", "EVENT_RETRY_ABOVE", "EVENT_RETRY_BELOW", "EVENT_RETRY_LOST", "EVENT_RETRY_MARGIN",
+    "EVENT_STEP_FLOOR", "event_columns",
 ]
 
 METHOD_AUTO = 0  # the system chooses (systems.preferred_method)
@@ -87,37 +107,6 @@ STEP_ACCEPTED = 0  # verdicts on a trial step
 STEP_RETRY = 1
 STEP_FAILED = 2
 
-EVENT_COLUMNS = ("time", "guard", "new_sign", "alpha", "alpha_dot", "guard0", "guard1", "guard2",
-                 "monitor_max")
-N_EVENT_COLUMNS = len(EVENT_COLUMNS)
-MODE_SIZE = 5
-#: A step whose event lies between these fractions of it is taken again, ending just
-#: past the event (by the margin, a fraction of the new step) [-]; near the step's start
-#: the interpolant is as accurate as the state it starts from.
-EVENT_RETRY_ABOVE = 0.01
-EVENT_RETRY_BELOW = 0.999
-EVENT_RETRY_MARGIN = 1e-6
-#: Retaken steps in a row that may lose their crossing before the retakes stop until the
-#: next event [-].
-EVENT_RETRY_LOST = 2
-#: The shortest step after an event, and the shortest retaken step, as a fraction of
-#: the regime's last step [-].
-EVENT_STEP_FLOOR = 1e-3
-NG = systems.N_GUARDS
-
-
-@numba.njit(cache=True)
-def _sample(t, h, t_stop, i_out, t_out, y0, f0, y1, f1, work, kind, mode, scratch, y_out, mode_out):
-    """Fill the output times in (t, t_stop] of the current step; return the next index."""
-    n_out = t_out.shape[0]
-    while i_out < n_out and t_out[i_out] <= t_stop:
-        dense((t_out[i_out] - t) / h, h, y0, f0, y1, f1, work, kind, scratch)
-        for i in range(3):
-            y_out[i_out, i] = scratch[i]
-        for i in range(MODE_SIZE):
-            mode_out[i_out, i] = mode[i]
-        i_out += 1
-    return i_out
 
 
 # --- the steps of the driver's loop, compiled into it (inline="always": numba IR
@@ -126,13 +115,30 @@ def _sample(t, h, t_stop, i_out, t_out, y0, f0, y1, f1, work, kind, mode, scratc
 
 
 @numba.njit(cache=True, inline="always")
-def _workspace():
-    """Scratch arrays of one run: stepper stages, states [3] and guard values [NG]."""
-    stage_arrays = (np.empty((6, 3)), np.empty((6, 3)), np.empty((16, 3)), np.empty((7, 3)), np.empty(3),
-                    np.zeros(2), np.empty(4))
-    states = (np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3))
-    guards = (np.empty(NG), np.empty(NG), np.empty(NG), np.empty(NG), np.empty(NG), np.empty(NG), np.empty(NG),
-              np.empty(NG))
+def _allocate(system, y_start, n_out, max_events):
+    """The run's results, filled as it goes: outputs ``y_out`` (NaN until reached), their
+    modes, the event log and the counters; and its state ``y`` and mode. Refuses an
+    initial state whose size is not the system's."""
+    n = y_start.shape[0]
+    if n != systems.state_size(system):
+        raise ValueError("the initial state's size is not the system's state_size")
+    m = systems.guard_count(system)
+    y_out = np.full((n_out, n), np.nan)
+    mode_out = np.full((n_out, systems.mode_size(system)), np.nan)
+    events = np.empty((max_events, EVENT_GUARDS + m + n))
+    counters = np.zeros(COUNT_SIZE, dtype=np.int64)
+    return y_out, mode_out, events, counters, y_start.copy(), np.zeros(systems.mode_size(system))
+
+
+@numba.njit(cache=True, inline="always")
+def _workspace(n, m):
+    """Scratch arrays of one run: stepper stages, the Rosenbrock iteration matrix and its
+    pivots, states [n] and guard values [m]."""
+    stage_arrays = (np.empty((6, n)), np.empty((6, n)), np.empty((16, n)), np.empty((7, n)), np.empty(n),
+                    np.zeros(2), np.empty(4), np.empty((n, n)), np.empty(n, dtype=np.int64))
+    states = (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n))
+    guards = (np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m),
+              np.empty(m))
     return stage_arrays, states, guards
 
 
@@ -152,13 +158,13 @@ def _start(system, t, t_end, h_max, y, f, mode, p, g, gr, t_out, y_out, mode_out
     systems.initial_mode(system, t, y, p, mode)
     systems.rhs(system, t, y, mode, p, f)
     counters[COUNT_RHS] += 1
-    systems.guards(system, t, y, f[1], p, g, gr)
+    systems.guards(system, t, y, f, True, p, g, gr)
     n_out = t_out.shape[0]
     i_out = 0
     while i_out < n_out and t_out[i_out] <= t:
-        for i in range(3):
+        for i in range(y.shape[0]):
             y_out[i_out, i] = y[i]
-        for i in range(MODE_SIZE):
+        for i in range(mode.shape[0]):
             mode_out[i_out, i] = mode[i]
         i_out += 1
     h = min(h_max, 1e-5, t_end - t)
@@ -186,8 +192,8 @@ def _next_step(t, h, h_max, t_end, max_steps, counters):
 
 
 @numba.njit(cache=True, inline="always")
-def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, k16, ytmp, y1, f1, err, err3,
-                counters):
+def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, matrix, pivots, k16, ytmp, y1, f1,
+                err, err3, counters):
     """One step of ``h`` [s] from ``(t, y)`` by the method chosen for the mode into ``y1``
     (and ``f1`` after an explicit step).
 
@@ -203,20 +209,21 @@ def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, k
     chosen = systems.preferred_method(system, mode, p) if method == 0 else method
     if chosen == METHOD_ROSENBROCK:
         kind = KIND_HERMITE
-        counters[COUNT_RHS] += rosenbrock_step(system, t, y, f, h, mode, p, work, stages, y1, err)
+        counters[COUNT_RHS] += rosenbrock_step(system, t, y, f, h, mode, p, work, stages, matrix, pivots, y1, err)
         counters[COUNT_JACOBIANS] += 1
         order = 4.0
-        e = error_norm(y, y1, err, rtol, atol)
+        e = error_norm(y, y1, err, rtol, atol, systems.controlled_size(system))
     elif chosen == METHOD_DOP853:
         kind = KIND_DOP853
-        counters[COUNT_RHS] += dop853_step(system, t, y, f, h, mode, p, k16, ytmp, y1, f1, err, err3)
+        counters[COUNT_RHS] += dop853_step(system, t, y, f, h, mode, p, k16, ytmp, y1, f1, err, err3,
+                                            systems.controlled_size(system))
         order = 8.0
-        e = dop853_error_norm(y, y1, err, err3, h, rtol, atol)
+        e = dop853_error_norm(y, y1, err, err3, h, rtol, atol, systems.controlled_size(system))
     else:
         kind = KIND_DP5
         counters[COUNT_RHS] += dormand_prince_step(system, t, y, f, h, mode, p, work, y1, f1, err)
         order = 5.0
-        e = error_norm(y, y1, err, rtol, atol)
+        e = error_norm(y, y1, err, rtol, atol, systems.controlled_size(system))
     return kind, order, e
 
 
@@ -232,7 +239,10 @@ def _verdict(t, h, e, order, y1, counters):
         ``STEP_ACCEPTED``, ``STEP_RETRY`` or ``STEP_FAILED`` (a state that stays infinite
         or NaN down to the resolution of time; the status is set).
     """
-    if not (e == e) or not np.isfinite(y1[0]) or not np.isfinite(y1[1]):
+    finite = True
+    for i in range(y1.shape[0]):
+        finite = finite and math.isfinite(y1[i])
+    if not (e == e) or not finite:
         counters[COUNT_REJECTED] += 1
         h *= 0.25
         if h <= 4e-16 * max(1.0, abs(t)):  # else the next pass reports underflow
@@ -257,82 +267,7 @@ def _step_end(system, kind, t, h, y1, f1, mode, p, g1, gr1, counters):
         counters[COUNT_RHS] += 1
     else:
         counters[COUNT_EXPLICIT] += 1
-    systems.guards(system, t + h, y1, f1[1], p, g1, gr1)
-
-
-@numba.njit(cache=True, inline="always")
-def _cut_at_event(system, tau_event, t, h, y, f, y1, f1, dwork, kind, mode, p, ytmp, yo, g, gr, t_out, i_out,
-                  y_out, mode_out, monitor_max):
-    """Cut the step at the event: fill the output times before it, move the state there
-    and take its guards.
-
-    Returns
-    -------
-    t_new : float
-        Time of the event [s].
-    i_out : int
-        Index of the next output time.
-    monitor_max : float
-        Largest monitored value since the last event, the event included.
-    """
-    t_new = t + tau_event * h
-    dense(tau_event, h, y, f, y1, f1, dwork, kind, ytmp)
-    i_out = _sample(t, h, t_new, i_out, t_out, y, f, y1, f1, dwork, kind, mode, yo, y_out, mode_out)
-    for i in range(3):
-        y[i] = ytmp[i]
-    systems.guards(system, t_new, y, math.nan, p, g, gr)
-    return t_new, i_out, max(monitor_max, systems.monitor(system, t_new, y, mode, p))
-
-
-@numba.njit(cache=True, inline="always")
-def _log_event(system, k_event, t_new, y, g, mode, p, events, n_events, monitor_max, counters):
-    """Log the event (columns :data:`EVENT_COLUMNS`, while the log has room) and switch
-    the mode; returns the number of logged events."""
-    max_events = events.shape[0]
-    if n_events < max_events:
-        ev = events[n_events]
-        ev[0] = t_new
-        ev[1] = k_event
-        ev[3] = y[0]
-        ev[4] = y[1]
-        ev[5] = g[0]
-        ev[6] = g[1]
-        ev[7] = g[2]
-        ev[8] = monitor_max
-    else:
-        counters[COUNT_EVENTS_DROPPED] += 1
-    systems.transition(system, k_event, t_new, y, g, mode, p)
-    if n_events < max_events:
-        events[n_events, 2] = systems.expected_sign(system, k_event, mode, p)
-        n_events += 1
-    counters[COUNT_EVENTS] += 1
-    return n_events
-
-
-@numba.njit(cache=True, inline="always")
-def _restart(system, t, h, tau_event, y, f, g, gr, mode, p, h_regime, counters):
-    """Rates and guards in the new mode at ``t`` [s].
-
-    Returns
-    -------
-    monitor_max : float
-        The monitored quantity at ``t``.
-    h : float
-        The next trial step [s]: the cut step, at least a tenth of the last, and between
-        :data:`EVENT_STEP_FLOOR` times and once the new regime's last step (a contact is
-        far faster than free flight; the floor keeps a guard that chatters on rounding
-        noise, events a picosecond apart, from shrinking the step tenfold per event
-        until it underflows: a longer step still cuts at its first crossing).
-    """
-    systems.rhs(system, t, y, mode, p, f)
-    counters[COUNT_RHS] += 1
-    systems.guards(system, t, y, f[1], p, g, gr)   # the rates in the new mode
-    monitor_max = systems.monitor(system, t, y, mode, p)
-    h = max(h * tau_event, h * 0.1) if tau_event > 0.0 else h
-    r_new = systems.regime(system, mode, p)
-    if h_regime[r_new] > 0.0:
-        h = min(max(h, EVENT_STEP_FLOOR * h_regime[r_new]), h_regime[r_new])
-    return monitor_max, h
+    systems.guards(system, t + h, y1, f1, True, p, g1, gr1)
 
 
 @numba.njit(cache=True, inline="always")
@@ -357,12 +292,12 @@ def _advance(system, t, h, t_stop, e, order, y, f, y1, f1, dwork, kind, mode, p,
     """
     if i_out < t_out.shape[0] and t_out[i_out] <= t + h:
         ready = ensure_extension(ready, system, t, y, h, y1, f1, mode, p, k16, ytmp, f7, counters)
-    i_out = _sample(t, h, t + h, i_out, t_out, y, f, y1, f1, dwork, kind, mode, yo, y_out, mode_out)
+    i_out = sample(t, h, t + h, i_out, t_out, y, f, y1, f1, dwork, kind, mode, yo, y_out, mode_out)
     t = t_stop
-    for i in range(3):
+    for i in range(y.shape[0]):
         y[i] = y1[i]
         f[i] = f1[i]
-    for i in range(NG):
+    for i in range(g.shape[0]):
         g[i] = g1[i]
         gr[i] = gr1[i]
     monitor_max = max(monitor_max, systems.monitor(system, t, y, mode, p))
@@ -370,42 +305,6 @@ def _advance(system, t, h, t_stop, e, order, y, f, y1, f1, dwork, kind, mode, p,
     factor = 0.9 * e ** (-1.0 / order) if e > 0.0 else 5.0
     h *= min(5.0, max(0.2, factor))
     return t, i_out, monitor_max, h
-
-
-@numba.njit(cache=True, inline="always")
-def _retake(system, mode, p, h_regime, k_event, tau_event, h, retaking, lost, counters):
-    """Whether to take the step again so that it ends just past its event, and the step
-    [s] to take: its end state then carries the step's own error control, not the
-    interpolant's (unestimated) error, which is large where the step straddles a point
-    at which the mode's right-hand side is not smooth (a Hertz force |delta|^1.5 at
-    separation). Not twice in a row (``retaking``: this step is the retaken one), nor for
-    an event near the step's start, where the interpolant is as accurate as the state it
-    starts from; nor when the retaken step would be shorter than
-    :data:`EVENT_STEP_FLOOR` times the regime's last step (a crossing that close is
-    rounding noise or a restart's neighbour). A retaken step counts as rejected.
-
-    A retaken step can lose the crossing: a guard that grazes zero moves its crossing
-    with the step. ``lost`` counts such steps since the last event; after
-    :data:`EVENT_RETRY_LOST` of them the crossing is taken from the interpolant until the
-    next event, since each retake of a receding crossing shrinks the step by the
-    fraction ``tau_event`` and a sequence of them would end in a vanishing step.
-
-    Returns
-    -------
-    h : float
-        The step to take next [s].
-    retake : bool
-    lost : int
-    """
-    if retaking:
-        return h, False, lost + 1 if k_event < 0 else 0
-    floor = EVENT_STEP_FLOOR * h_regime[systems.regime(system, mode, p)]
-    if (k_event >= 0 and EVENT_RETRY_ABOVE < tau_event < EVENT_RETRY_BELOW and lost < EVENT_RETRY_LOST
-            and tau_event * h > floor):
-        counters[COUNT_ACCEPTED] -= 1
-        counters[COUNT_REJECTED] += 1
-        return h * tau_event * (1.0 + EVENT_RETRY_MARGIN), True, lost
-    return h, False, 0 if k_event >= 0 else lost
 
 
 @numba.njit(cache=True, pipeline_class=InlinedPipeline)
@@ -419,8 +318,8 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
         System id (:mod:`camdyn.systems.registry`).
     p : ndarray
         Parameter vector.
-    y_start : ndarray (3,)
-        Initial state.
+    y_start : ndarray (n,)
+        Initial state, of the system's ``state_size`` components.
     t_start, t_end : float
         Time span [s].
     t_out : ndarray
@@ -441,24 +340,18 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
 
     Returns
     -------
-    y_out : ndarray (n_out, 3)
-    mode_out : ndarray (n_out, 4)
+    y_out : ndarray (n_out, n)
+    mode_out : ndarray (n_out, mode_size)
         Hybrid mode at each output time.
-    events : ndarray (n_events, 9)
-        Event log, columns :data:`EVENT_COLUMNS`.
+    events : ndarray (n_events, 4 + m + n)
+        Event log, columns :func:`event_columns` (``m`` guards).
     counters : ndarray (10,) of int64
     """
-    n_out = t_out.shape[0]
-    y_out = np.full((n_out, 3), np.nan)
-    mode_out = np.full((n_out, MODE_SIZE), np.nan)
-    events = np.empty((max_events, N_EVENT_COLUMNS))
-    counters = np.zeros(COUNT_SIZE, dtype=np.int64)
-    stage_arrays, states, guards = _workspace()
-    work, stages, k16, f7, err3, h_regime, pts = stage_arrays
+    y_out, mode_out, events, counters, y, mode = _allocate(system, y_start, t_out.shape[0], max_events)
+    stage_arrays, states, guards = _workspace(y.shape[0], events.shape[1] - EVENT_GUARDS - y.shape[0])
+    work, stages, k16, f7, err3, h_regime, pts, matrix, pivots = stage_arrays
     y1, f, f1, err, ytmp, ymid, yo = states
     g, gr, g1, gr1, gv, grv, g_tmp, gr_tmp = guards
-    y = y_start.copy()
-    mode = np.zeros(MODE_SIZE)
     t = t_start
     i_out, h, monitor_max = _start(system, t, t_end, h_max, y, f, mode, p, g, gr, t_out, y_out, mode_out, counters)
     n_events = 0
@@ -474,8 +367,8 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             if interrupted():
                 counters[COUNT_STATUS] = STATUS_INTERRUPTED
                 break
-        kind, order, e = _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, k16, ytmp, y1,
-                                     f1, err, err3, counters)
+        kind, order, e = _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, matrix, pivots,
+                                     k16, ytmp, y1, f1, err, err3, counters)
         dwork = f7 if kind == KIND_DOP853 else work
         ready = kind != KIND_DOP853
         h, verdict = _verdict(t, h, e, order, y1, counters)
@@ -488,18 +381,18 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
                                 gv, grv, ready, counters)
         tau_event, k_event, ready = earliest_crossing(system, t, h, y, f, y1, f1, dwork, kind, mode, p, k16, ytmp,
                                                       f7, g, gr, g1, gr1, gv, pts, g_tmp, gr_tmp, ready, counters)
-        h, retried, lost = _retake(system, mode, p, h_regime, k_event, tau_event, h, retried, lost, counters)
+        h, retried, lost = retake(system, mode, p, h_regime, k_event, tau_event, h, retried, lost, counters)
         if k_event >= 0 and not retried:
-            t_new, i_out, monitor_max = _cut_at_event(system, tau_event, t, h, y, f, y1, f1, dwork, kind, mode, p,
+            t_new, i_out, monitor_max = cut_at_event(system, tau_event, t, h, y, f, y1, f1, dwork, kind, mode, p,
                                                       ytmp, yo, g, gr, t_out, i_out, y_out, mode_out, monitor_max)
-            n_events = _log_event(system, k_event, t_new, y, g, mode, p, events, n_events, monitor_max, counters)
+            n_events = log_event(system, k_event, t_new, y, g, mode, p, events, n_events, monitor_max, counters)
             zeno = zeno + 1 if t_new - last_event_t <= 1e-12 * max(1.0, abs(t_new)) else 0
             if zeno > 1000:
                 counters[COUNT_STATUS] = STATUS_ZENO
                 break
             last_event_t = t_new
             t = t_new
-            monitor_max, h = _restart(system, t, h, tau_event, y, f, g, gr, mode, p, h_regime, counters)
+            monitor_max, h = restart(system, t, h, tau_event, y, f, g, gr, mode, p, h_regime, counters)
         elif k_event < 0:
             t, i_out, monitor_max, h = _advance(system, t, h, t_end if last else t + h, e, order, y, f, y1, f1,
                                                 dwork, kind, mode, p, k16, ytmp, f7, yo, g, gr, g1, gr1, t_out, i_out,

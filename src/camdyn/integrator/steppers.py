@@ -1,9 +1,11 @@
 """One step of each method, with its error estimate (the stepper half of the integrator).
 
-Both steppers integrate the 3-component state of :mod:`camdyn.systems.registry`, whose
-first equation is ``dy0/dt = y1`` (a second-order system in first-order form) and
-whose third component is a quadrature that feeds back into nothing. The Rosenbrock
-stepper uses these facts to solve its linear systems in closed form.
+The steppers integrate a state of any size ``n`` (the length of ``y``) of a system of
+:mod:`camdyn.systems.registry`; scratch arrays have ``n`` columns. The error norms are
+taken over the state's first ``controlled`` components (the system's
+``controlled_size``: components past them, such as quadratures that feed back into
+nothing, are integrated but not error-controlled). The Rosenbrock stepper solves its
+linear systems with a small LU factorization (:mod:`camdyn.integrator.linalg`).
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ import math
 
 import numba
 
+from camdyn.integrator.linalg import lu_factor, lu_solve
 from camdyn.integrator.tableaus import (
     D8_A,
     D8_A_FROM,
@@ -64,17 +67,16 @@ from camdyn.integrator.tableaus import (
 )
 from camdyn.systems import registry as systems
 
-N = 3  # state size
-
 
 @numba.njit(cache=True)
-def error_norm(y0, y1, err, rtol, atol):
-    """RMS of the error over the two dynamic components, scaled by ``atol + rtol |y|``."""
+def error_norm(y0, y1, err, rtol, atol, controlled):
+    """RMS of the error over the first ``controlled`` components, scaled by
+    ``atol + rtol |y|``."""
     acc = 0.0
-    for i in range(2):
+    for i in range(controlled):
         sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
         acc += (err[i] / sc) ** 2
-    return math.sqrt(acc / 2.0)
+    return math.sqrt(acc / controlled)
 
 
 @numba.njit(cache=True)
@@ -86,7 +88,7 @@ def hermite(tau, h, y0, f0, y1, f1, out):
     h10 = t3 - 2.0 * t2 + tau
     h01 = -2.0 * t3 + 3.0 * t2
     h11 = t3 - t2
-    for i in range(N):
+    for i in range(y0.shape[0]):
         out[i] = h00 * y0[i] + h10 * h * f0[i] + h01 * y1[i] + h11 * h * f1[i]
 
 
@@ -107,9 +109,10 @@ def dense(tau, h, y0, f0, y1, f1, work, kind, out):
     if kind == KIND_HERMITE:
         hermite(tau, h, y0, f0, y1, f1, out)
         return
+    n = y0.shape[0]
     if kind == KIND_DOP853:
         s = 1.0 - tau
-        for i in range(N):   # nested form: ((F6 x + F5)(1 - x) + F4) x ...
+        for i in range(n):   # nested form: ((F6 x + F5)(1 - x) + F4) x ...
             acc = ((((((work[6, i] * tau + work[5, i]) * s + work[4, i]) * tau + work[3, i]) * s
                       + work[2, i]) * tau + work[1, i]) * s + work[0, i]) * tau
             out[i] = y0[i] + acc
@@ -117,7 +120,7 @@ def dense(tau, h, y0, f0, y1, f1, work, kind, out):
     t2 = tau * tau
     t3 = t2 * tau
     t4 = t3 * tau
-    for i in range(N):
+    for i in range(n):
         acc = f0[i] * (DP_P[0, 0] * tau + DP_P[0, 1] * t2 + DP_P[0, 2] * t3 + DP_P[0, 3] * t4)
         for s in range(2, 6):  # work[s] holds k_(s+1); P row s; k2's row is zero
             acc += work[s, i] * (DP_P[s, 1] * t2 + DP_P[s, 2] * t3 + DP_P[s, 3] * t4)
@@ -129,188 +132,179 @@ def dense(tau, h, y0, f0, y1, f1, work, kind, out):
 def dormand_prince_step(system, t, y, f0, h, mode, p, work, y1, f1, err):
     """Explicit Dormand-Prince 5(4) step; ``f1`` receives f(t + h, y1) (FSAL).
 
-    ``work`` is a (6, 3) scratch array. Returns the number of right-hand-side calls.
+    ``work`` is a (6, n) scratch array. Returns the number of right-hand-side calls.
     """
+    n = y.shape[0]
     yt = work[0]
     k2 = work[1]
     k3 = work[2]
     k4 = work[3]
     k5 = work[4]
     k6 = work[5]
-    for i in range(N):
+    for i in range(n):
         yt[i] = y[i] + h * DP_A21 * f0[i]
     systems.rhs(system, t + DP_C2 * h, yt, mode, p, k2)
-    for i in range(N):
+    for i in range(n):
         yt[i] = y[i] + h * (DP_A31 * f0[i] + DP_A32 * k2[i])
     systems.rhs(system, t + DP_C3 * h, yt, mode, p, k3)
-    for i in range(N):
+    for i in range(n):
         yt[i] = y[i] + h * (DP_A41 * f0[i] + DP_A42 * k2[i] + DP_A43 * k3[i])
     systems.rhs(system, t + DP_C4 * h, yt, mode, p, k4)
-    for i in range(N):
+    for i in range(n):
         yt[i] = y[i] + h * (DP_A51 * f0[i] + DP_A52 * k2[i] + DP_A53 * k3[i] + DP_A54 * k4[i])
     systems.rhs(system, t + DP_C5 * h, yt, mode, p, k5)
-    for i in range(N):
+    for i in range(n):
         yt[i] = y[i] + h * (DP_A61 * f0[i] + DP_A62 * k2[i] + DP_A63 * k3[i] + DP_A64 * k4[i]
                             + DP_A65 * k5[i])
     systems.rhs(system, t + h, yt, mode, p, k6)
-    for i in range(N):
+    for i in range(n):
         y1[i] = y[i] + h * (DP_B1 * f0[i] + DP_B3 * k3[i] + DP_B4 * k4[i] + DP_B5 * k5[i] + DP_B6 * k6[i])
     systems.rhs(system, t + h, y1, mode, p, f1)
-    for i in range(N):
+    for i in range(n):
         err[i] = h * (DP_E1 * f0[i] + DP_E3 * k3[i] + DP_E4 * k4[i] + DP_E5 * k5[i] + DP_E6 * k6[i]
                       + DP_E7 * f1[i])
     return 6
 
 
 @numba.njit(cache=True)
-def _solve(c, j10, j11, j20, j21, r, g):
-    """Solve (c I - J) g = r for J = [[0, 1, 0], [j10, j11, 0], [j20, j21, 0]]."""
-    det = c * (c - j11) - j10
-    g[0] = ((c - j11) * r[0] + r[1]) / det
-    g[1] = (c * r[1] + j10 * r[0]) / det
-    g[2] = (r[2] + j20 * g[0] + j21 * g[1]) / c
-
-
-@numba.njit(cache=True)
-def rosenbrock_step(system, t, y, f0, h, mode, p, work, stages, y1, err):
+def rosenbrock_step(system, t, y, f0, h, mode, p, work, stages, matrix, pivots, y1, err):
     """Linearly implicit RODAS4 step.
 
     The Jacobian comes from the system (:func:`camdyn.systems.registry.jacobian`), the time
     derivative of the right-hand side from a forward difference. ``work`` and ``stages``
-    are (6, 3) scratch arrays. Returns the number of right-hand-side calls.
+    are (6, n) scratch arrays, ``matrix`` (n, n) and ``pivots`` (n,) the iteration
+    matrix ``I / (gamma h) - J`` and its LU factorization's row swaps. Returns the number
+    of right-hand-side calls (a singular iteration matrix makes ``err`` infinite, so the
+    step is refused and retried shorter).
     """
+    n = y.shape[0]
     yt = work[0]
     fe = work[1]
     dfdt = work[2]
     r = work[3]
-    jac = work[4:6].reshape(6)   # the Jacobian's four entries: one row of work is one short
-    systems.jacobian(system, t, y, f0, mode, p, jac)
-    j10 = jac[0]
-    j11 = jac[1]
-    j20 = jac[2]
-    j21 = jac[3]
+    systems.jacobian(system, t, y, f0, mode, p, matrix)
+    c = 1.0 / (RB_GAMMA * h)
+    for i in range(n):
+        for j in range(n):
+            matrix[i, j] = -matrix[i, j]
+        matrix[i, i] += c
+    singular = lu_factor(matrix, pivots)
     epst = 1.5e-8 * max(abs(t), 1e-3)
     systems.rhs(system, t + epst, y, mode, p, fe)
-    for i in range(N):
+    for i in range(n):
         dfdt[i] = (fe[i] - f0[i]) / epst
-    c = 1.0 / (RB_GAMMA * h)
     calls = 1
     for s in range(RB_STAGES):
         if s == 0:
-            for i in range(N):
+            for i in range(n):
                 fe[i] = f0[i]
         else:
-            for i in range(N):
+            for i in range(n):
                 acc = y[i]
                 for j in range(s):
                     acc += RB_A[s, j] * stages[j, i]
                 yt[i] = acc
             systems.rhs(system, t + RB_C[s] * h, yt, mode, p, fe)
             calls += 1
-        for i in range(N):
+        for i in range(n):
             acc = fe[i] + h * RB_G[s] * dfdt[i]
             for j in range(s):
                 acc += RB_CC[s, j] * stages[j, i] / h
             r[i] = acc
-        _solve(c, j10, j11, j20, j21, r, stages[s])
-    for i in range(N):
+        lu_solve(matrix, pivots, r, stages[s])
+    for i in range(n):
         acc = y[i]
         for s in range(RB_STAGES):
             acc += RB_M[s] * stages[s, i]
         y1[i] = acc
-        err[i] = stages[RB_STAGES - 1, i]
+        err[i] = math.inf if singular else stages[RB_STAGES - 1, i]
     return calls
 
 
 @numba.njit(cache=True)
 def _dop853_stage(system, t, y, h, s, mode, p, k, yt):
-    """Stage ``s`` of DOP853 (steps and continuous extension alike) into ``k[s]``.
-
-    The three components are summed side by side, over the row's nonzero columns only
-    (:data:`camdyn.integrator.tableaus.D8_A_FROM`).
-    """
-    c = D8_A[s, 0]
-    a0 = c * k[0, 0]
-    a1 = c * k[0, 1]
-    a2 = c * k[0, 2]
-    for j in range(D8_A_FROM[s], s):
-        c = D8_A[s, j]
-        a0 += c * k[j, 0]
-        a1 += c * k[j, 1]
-        a2 += c * k[j, 2]
-    yt[0] = y[0] + h * a0
-    yt[1] = y[1] + h * a1
-    yt[2] = y[2] + h * a2
+    """Stage ``s`` of DOP853 (steps and continuous extension alike) into ``k[s]``, summed
+    over the row's nonzero columns only (:data:`camdyn.integrator.tableaus.D8_A_FROM`)."""
+    start = D8_A_FROM[s]
+    if y.shape[0] == 3:   # the cam-follower's size, unrolled (the same sums, in the same order)
+        c = D8_A[s, 0]
+        a0 = c * k[0, 0]
+        a1 = c * k[0, 1]
+        a2 = c * k[0, 2]
+        for j in range(start, s):
+            c = D8_A[s, j]
+            a0 += c * k[j, 0]
+            a1 += c * k[j, 1]
+            a2 += c * k[j, 2]
+        yt[0] = y[0] + h * a0
+        yt[1] = y[1] + h * a1
+        yt[2] = y[2] + h * a2
+    else:
+        for i in range(y.shape[0]):
+            acc = D8_A[s, 0] * k[0, i]
+            for j in range(start, s):
+                acc += D8_A[s, j] * k[j, i]
+            yt[i] = y[i] + h * acc
     systems.rhs_inline(system, t + D8_C[s] * h, yt, mode, p, k[s])
 
 
 @numba.njit(cache=True)
-def dop853_step(system, t, y, f0, h, mode, p, k, yt, y1, f1, err5, err3):
-    """Explicit DOP853 step: 12 stages plus f(t + h, y1) into ``k[12]`` (``k`` is 16 x 3).
+def dop853_step(system, t, y, f0, h, mode, p, k, yt, y1, f1, err5, err3, controlled):
+    """Explicit DOP853 step: 12 stages plus f(t + h, y1) into ``k[12]`` (``k`` is 16 x n).
 
-    ``err5`` and ``err3`` receive the two embedded error estimates (without the factor h)
-    of the two dynamic components (the third, a quadrature, is not error-controlled);
+    ``err5`` and ``err3`` receive the two embedded error estimates (without the factor
+    h) of the first ``controlled`` components (zero for the rest);
     :func:`dop853_error_norm` combines them as Hairer's DOP853 does. ``yt`` is scratch.
     """
-    for i in range(N):
+    n = y.shape[0]
+    for i in range(n):
         k[0, i] = f0[i]
     for s in range(1, D8_STAGES):
         _dop853_stage(system, t, y, h, s, mode, p, k, yt)
-    c = D8_B[0]
-    a0 = c * k[0, 0]
-    a1 = c * k[0, 1]
-    a2 = c * k[0, 2]
-    for j in range(D8_B_FROM, D8_STAGES):
-        c = D8_B[j]
-        a0 += c * k[j, 0]
-        a1 += c * k[j, 1]
-        a2 += c * k[j, 2]
-    y1[0] = y[0] + h * a0
-    y1[1] = y[1] + h * a1
-    y1[2] = y[2] + h * a2
+    for i in range(n):
+        acc = D8_B[0] * k[0, i]
+        for j in range(D8_B_FROM, D8_STAGES):
+            acc += D8_B[j] * k[j, i]
+        y1[i] = y[i] + h * acc
     systems.rhs_inline(system, t + h, y1, mode, p, f1)
-    for i in range(N):
+    for i in range(n):
         k[D8_STAGES, i] = f1[i]
-    e50 = D8_E5[0] * k[0, 0]
-    e51 = D8_E5[0] * k[0, 1]
-    e30 = D8_E3[0] * k[0, 0]
-    e31 = D8_E3[0] * k[0, 1]
-    for j in range(D8_B_FROM, D8_STAGES + 1):
-        e50 += D8_E5[j] * k[j, 0]
-        e51 += D8_E5[j] * k[j, 1]
-        e30 += D8_E3[j] * k[j, 0]
-        e31 += D8_E3[j] * k[j, 1]
-    err5[0] = e50
-    err5[1] = e51
-    err5[2] = 0.0
-    err3[0] = e30
-    err3[1] = e31
-    err3[2] = 0.0
+    for i in range(controlled):   # the estimates of the components the error norm reads
+        e5 = D8_E5[0] * k[0, i]
+        e3 = D8_E3[0] * k[0, i]
+        for j in range(D8_B_FROM, D8_STAGES + 1):
+            e5 += D8_E5[j] * k[j, i]
+            e3 += D8_E3[j] * k[j, i]
+        err5[i] = e5
+        err3[i] = e3
+    for i in range(controlled, n):
+        err5[i] = 0.0
+        err3[i] = 0.0
     return D8_STAGES
 
 
 @numba.njit(cache=True)
-def dop853_error_norm(y0, y1, err5, err3, h, rtol, atol):
+def dop853_error_norm(y0, y1, err5, err3, h, rtol, atol, controlled):
     """Scaled error norm of a DOP853 step (Hairer's combination of the 5th- and
-    3rd-order estimates), over the two dynamic components."""
+    3rd-order estimates), over the first ``controlled`` components."""
     e5 = 0.0
     e3 = 0.0
-    for i in range(2):
+    for i in range(controlled):
         sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
         e5 += (err5[i] / sc) ** 2
         e3 += (err3[i] / sc) ** 2
     if e5 == 0.0 and e3 == 0.0:
         return 0.0
-    return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * 2.0)
+    return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * controlled)
 
 
 @numba.njit(cache=True)
 def dop853_extend(system, t, y, h, y1, f1, mode, p, k, yt, out):
     """Three extra stages and the 7 coefficient rows of DOP853's continuous extension
-    into ``out`` (7 x 3). Returns the number of right-hand-side calls."""
+    into ``out`` (7 x n). Returns the number of right-hand-side calls."""
     for s in range(D8_STAGES + 1, 16):
         _dop853_stage(system, t, y, h, s, mode, p, k, yt)
-    for i in range(N):
+    for i in range(y.shape[0]):
         dy = y1[i] - y[i]
         out[0, i] = dy
         out[1, i] = h * k[0, i] - dy

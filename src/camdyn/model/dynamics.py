@@ -163,7 +163,9 @@ def guards(t, y, alpha_ddot, p, out, rates):
 
 @numba.njit(cache=True)
 def jacobian(t, y, f0, mode, p, jac):
-    """Jacobian ``(d f1/d y0, d f1/d y1, d f2/d y0, d f2/d y1)`` of the right-hand side.
+    """Jacobian rows 1 and 2 of the right-hand side: ``jac[1, 0:2] = d f1 / d (y0, y1)``
+    and ``jac[2, 0:2] = d f2 / d (y0, y1)`` (``jac`` is 3 x 3; its other entries, row 0's
+    ``(0, 1, 0)`` and the zero third column, are left as the caller set them).
 
     The penetration ``delta`` is a small difference of large lengths (about 1 um out of
     tens of mm), so a finite difference in ``alpha`` through ``delta`` loses most of its
@@ -198,10 +200,10 @@ def jacobian(t, y, f0, mode, p, jac):
         j10 = (res_a[0] - res0[0]) / eps_a
         j20 = 0.0
     res_v = evaluate_shifted(t, alpha, ad + eps_v, mode, p, 0.0)
-    jac[0] = j10
-    jac[1] = (res_v[0] - res0[0]) / eps_v
-    jac[2] = j20
-    jac[3] = (res_v[10] - res0[10]) / eps_v
+    jac[1, 0] = j10
+    jac[1, 1] = (res_v[0] - res0[0]) / eps_v
+    jac[2, 0] = j20
+    jac[2, 1] = (res_v[10] - res0[10]) / eps_v
 
 
 @numba.njit(cache=True)

@@ -11,8 +11,6 @@ Parameter vector ``p``: ``(w [rad/s], zeta [-], A [m/s^2], W [rad/s], sigma [m],
 
 from __future__ import annotations
 
-import math
-
 import numba
 
 NATURAL = 0
@@ -26,14 +24,10 @@ N_PARAMETERS = 6
 
 @numba.njit(cache=True)
 def guards(t, y, p, values, rates):
-    """Guard 0: the gap ``sigma - x`` [m] to the wall and its rate ``-x'`` [m/s]; guards
-    1 and 2 are not used."""
+    """Guard 0 (the only one): the gap ``sigma - x`` [m] to the wall and its rate
+    ``-x'`` [m/s]."""
     values[0] = p[WALL] - y[0]
     rates[0] = -y[1]
-    values[1] = 1.0
-    rates[1] = math.nan
-    values[2] = 1.0
-    rates[2] = math.nan
 
 
 @numba.njit(cache=True)

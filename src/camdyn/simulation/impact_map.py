@@ -44,6 +44,9 @@ from camdyn.params.units import parse_speed
 from camdyn.simulation.runner import prepare
 from camdyn.systems import registry as systems
 
+#: event-log column of alpha at the event (then alpha_dot): after the cam-follower's 3 guards
+ALPHA_AT = driver.event_columns(3, 3).index("state0")
+
 __all__ = ["simulate_impact_map"]
 
 
@@ -182,7 +185,7 @@ def _flights(p, y, duration, period, t_out, y_out, rtol, atol, law, limit, pulse
             t = span_end
             y = ys[-1].copy() if times.size else y
             continue
-        alpha, rate = onsets[0, 3], onsets[0, 4]
+        alpha, rate = onsets[0, ALPHA_AT], onsets[0, ALPHA_AT + 1]
         row, new_rate = _impact(p, t_hit, alpha, rate, law)
         rows.append(row)
         if len(rows) > limit:

@@ -122,6 +122,9 @@ def impact_table(events: np.ndarray) -> dict:
     onset), ``separation_velocity`` [m/s] (-delta_dot at separation), ``peak_penetration``
     [m], ``peak_force`` [N], ``duration`` [s].
     """
+    delta_at = driver.EVENT_GUARDS + 0          # the guards' values at each event (camdyn.model.dynamics.guards)
+    delta_dot_at = driver.EVENT_GUARDS + 2
+    force_at = driver.EVENT_MONITOR            # the peak force since the previous event (registry.monitor)
     rows = []
     start = None
     peak_delta = 0.0
@@ -133,12 +136,12 @@ def impact_table(events: np.ndarray) -> dict:
             peak_delta = 0.0
             peak_force = 0.0
         elif start is not None and k == 2 and new_sign <= 0:  # end of compression
-            peak_delta = max(peak_delta, ev[5])
-            peak_force = max(peak_force, ev[8])
+            peak_delta = max(peak_delta, ev[delta_at])
+            peak_force = max(peak_force, ev[force_at])
         elif start is not None:
-            peak_force = max(peak_force, ev[8])
+            peak_force = max(peak_force, ev[force_at])
             if k == 0 and new_sign < 0:
-                rows.append((start[0], start[7], -ev[7], peak_delta, peak_force, t - start[0]))
+                rows.append((start[0], start[delta_dot_at], -ev[delta_dot_at], peak_delta, peak_force, t - start[0]))
                 start = None
     arr = np.array(rows, dtype=float).reshape(-1, 6)
     names = ("time", "approach_velocity", "separation_velocity", "peak_penetration", "peak_force", "duration")

@@ -108,7 +108,7 @@ def simulate_points(params, starts, periods, revolutions, discard, samples, rtol
                 continue
             if events[e, 1] == 0 and events[e, 2] > 0:
                 count_on += 1
-            peak = max(peak, events[e, 8])
+            peak = max(peak, events[e, driver.EVENT_MONITOR])
         onsets[i] = count_on
         impact_force[i] = peak
     return window, onsets, impact_force, counters

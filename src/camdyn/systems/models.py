@@ -1,0 +1,240 @@
+"""The models the compiled driver can integrate, each behind one branch of every function
+here (the per-model half of :mod:`camdyn.systems.registry`, which adds the variational
+systems and is what the integrator imports).
+
+Each system provides, for a state ``y`` of ``state_size`` components, ``guard_count``
+guards and a mode vector of ``mode_size`` slots:
+
+- ``rhs(t, y, mode, p, dydt)`` and ``jacobian(t, y, f0, mode, p, jac)`` (``jac`` is the
+  full ``n x n`` matrix ``d f / d y``);
+- ``controlled_size``: how many leading state components the error control watches
+  (the rest, such as quadratures that feed back into nothing, are integrated only);
+- ``guards(t, y, f, known, p, values, rates)``: event functions and their time
+  derivatives (NaN where unknown), given the state's rates ``f = dy/dt`` at ``(t, y)``
+  when ``known``; a guard crossing its expected sign is an event;
+- ``expected_sign(k, mode, p)``: +1 or -1 for an active guard, 0 for an inactive one;
+- ``transition(k, t, y, values, mode, p)``: the new mode after guard ``k`` crossed, and
+  the state's reset (an impact's velocity jump) where the system has one;
+- ``preferred_method(mode, p)``: the stepper automatic selection uses;
+- ``monitor(t, y, mode, p)``: a scalar whose maximum between events is logged.
+
+System 0 is the cam-follower (:mod:`camdyn.model.dynamics`); system 1 is a forced
+linear oscillator with a closed-form solution, and system 2 the same oscillator against
+a rigid wall with Newton's restitution (:mod:`camdyn.model.impact_oscillator`), whose
+impacts reset the state in :func:`transition`; system 3 is two coupled oscillators, the
+second against a wall (:mod:`camdyn.model.coupled_oscillator`, 4 states, 1 guard). The
+three test the integrator.
+
+A new model gets an id here and a branch in each function; this module is the only one
+that imports the models.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from camdyn.model import coupled_oscillator, dynamics, impact_oscillator
+from camdyn.model import layout as L
+
+CAM_FOLLOWER = 0
+OSCILLATOR = 1
+RIGID_IMPACT = 2
+COUPLED_OSCILLATORS = 3
+
+
+@numba.njit(cache=True)
+def state_size(system):
+    """Number of state components."""
+    if system == COUPLED_OSCILLATORS:
+        return coupled_oscillator.STATE_SIZE
+    return 3
+
+
+@numba.njit(cache=True)
+def controlled_size(system):
+    """Number of leading state components under error control: the cam-follower's and
+    the oscillators' third component is a quadrature that feeds back into nothing."""
+    if system == COUPLED_OSCILLATORS:
+        return coupled_oscillator.STATE_SIZE
+    return 2
+
+
+@numba.njit(cache=True)
+def guard_count(system):
+    """Number of guard functions."""
+    if system == CAM_FOLLOWER:
+        return 3
+    return 1
+
+
+@numba.njit(cache=True)
+def mode_size(system):
+    """Number of slots of the mode vector."""
+    if system == CAM_FOLLOWER:
+        return L.MODE_SIZE
+    return 1
+
+
+# --- forced linear oscillator: y'' + 2 zeta w y' + w^2 y = A cos(W t); p = (w, zeta, A, W, stiff)
+@numba.njit(cache=True)
+def _osc_rhs(t, y, p, dydt):
+    dydt[0] = y[1]
+    dydt[1] = p[2] * math.cos(p[3] * t) - 2.0 * p[1] * p[0] * y[1] - p[0] * p[0] * y[0]
+    dydt[2] = y[0]
+
+
+@numba.njit(cache=True)
+def rhs(system, t, y, mode, p, dydt):
+    if system == CAM_FOLLOWER:
+        dynamics.rhs(t, y, mode, p, dydt)
+    elif system == COUPLED_OSCILLATORS:
+        coupled_oscillator.rhs(t, y, p, dydt)
+    else:
+        _osc_rhs(t, y, p, dydt)
+
+
+@numba.njit(cache=True, inline="always")
+def rhs_inline(system, t, y, mode, p, dydt):
+    """:func:`rhs` compiled into its caller (numba IR inlining). DOP853's stages use it:
+    it saves a call and the reference counting of its array arguments per evaluation,
+    about a fifth of a DOP853 step; the other callers keep the call, which compiles
+    faster."""
+    if system == CAM_FOLLOWER:
+        dynamics.rhs(t, y, mode, p, dydt)
+    elif system == COUPLED_OSCILLATORS:
+        coupled_oscillator.rhs(t, y, p, dydt)
+    else:
+        _osc_rhs(t, y, p, dydt)
+
+
+@numba.njit(cache=True)
+def jacobian(system, t, y, f0, mode, p, jac):
+    """The Jacobian ``jac = d f / d y`` (n x n) at ``(t, y)``, where ``f0 = f(t, y)``."""
+    if system == COUPLED_OSCILLATORS:
+        coupled_oscillator.jacobian(p, jac)
+        return
+    jac[:, :] = 0.0
+    jac[0, 1] = 1.0   # second-order systems in first-order form; the quadrature's column is zero
+    if system == CAM_FOLLOWER:
+        dynamics.jacobian(t, y, f0, mode, p, jac)
+    else:
+        w, z = p[0], p[1]
+        jac[1, 0] = -w * w
+        jac[1, 1] = -2.0 * z * w
+        jac[2, 0] = 1.0
+
+
+@numba.njit(cache=True)
+def guards(system, t, y, f, known, p, values, rates):
+    if system == CAM_FOLLOWER:
+        dynamics.guards(t, y, f[1] if known else math.nan, p, values, rates)
+    elif system == RIGID_IMPACT:
+        impact_oscillator.guards(t, y, p, values, rates)
+    elif system == COUPLED_OSCILLATORS:
+        coupled_oscillator.guards(t, y, p, values, rates)
+    else:
+        values[0] = y[0]
+        rates[0] = y[1]
+
+
+@numba.njit(cache=True)
+def expected_sign(system, k, mode, p):
+    if system == CAM_FOLLOWER:
+        contact = mode[L.MODE_CONTACT] > 0.5
+        if k == 0:
+            return 1.0 if contact else -1.0
+        if not contact:
+            return 0.0
+        if k == 1:
+            return mode[L.MODE_SLIP] if p[L.FRICTION_LAW] == 1.0 else 0.0
+        # peak penetration of an impact, for the impact table (laws D and E switch on
+        # the sign of delta_dot inside the force law and need no event)
+        if mode[L.MODE_IMPACT] > 0.5:
+            return 1.0 if mode[L.MODE_COMPRESSING] > 0.5 else -1.0
+        return 0.0
+    if system == RIGID_IMPACT or system == COUPLED_OSCILLATORS:
+        return 1.0   # the gap to the wall stays positive in flight
+    if k == 0:
+        return mode[0]
+    return 0.0
+
+
+@numba.njit(cache=True)
+def transition(system, k, t, y, values, mode, p):
+    if system == CAM_FOLLOWER:
+        if k == 0:
+            if mode[L.MODE_CONTACT] > 0.5:
+                mode[L.MODE_CONTACT] = 0.0
+            else:
+                mode[L.MODE_CONTACT] = 1.0
+                mode[L.MODE_IMPACT] = 1.0
+                mode[L.MODE_APPROACH] = values[2]
+                mode[L.MODE_SLIP] = 1.0 if values[1] >= 0.0 else -1.0
+                mode[L.MODE_COMPRESSING] = 1.0 if values[2] > 0.0 else 0.0
+        elif k == 1:
+            mode[L.MODE_SLIP] = -mode[L.MODE_SLIP]
+        else:
+            mode[L.MODE_COMPRESSING] = 1.0 - mode[L.MODE_COMPRESSING]
+            if mode[L.MODE_COMPRESSING] < 0.5:
+                # the impact's peak is passed (its force peaks at or before it): stop
+                # watching delta_dot, which in sustained stiff contact hovers at zero and
+                # would cross it on rounding noise alone
+                mode[L.MODE_IMPACT] = 0.0
+    elif system == RIGID_IMPACT:
+        impact_oscillator.reset(y, p)   # the state jumps; the mode stays
+    elif system == COUPLED_OSCILLATORS:
+        coupled_oscillator.reset(y, p)
+    else:
+        mode[0] = -mode[0]
+
+
+@numba.njit(cache=True)
+def initial_mode(system, t, y, p, mode):
+    values = np.empty(guard_count(system))
+    rates = np.empty(guard_count(system))
+    guards(system, t, y, y, False, p, values, rates)
+    if system == CAM_FOLLOWER:
+        mode[L.MODE_CONTACT] = 1.0 if values[0] > 0.0 else 0.0
+        mode[L.MODE_SLIP] = 1.0 if values[1] >= 0.0 else -1.0
+        mode[L.MODE_COMPRESSING] = 1.0 if values[2] > 0.0 else 0.0
+        mode[L.MODE_APPROACH] = p[L.V_REFERENCE]
+        mode[L.MODE_IMPACT] = 0.0
+    else:
+        mode[0] = 1.0 if values[0] >= 0.0 else -1.0
+
+
+@numba.njit(cache=True)
+def regime(system, mode, p):
+    """Index (0 or 1) of the dynamic regime of a mode; the driver remembers the last step
+    size of each regime, so that a step after an event starts at the right scale."""
+    if system == CAM_FOLLOWER:
+        return 1 if mode[L.MODE_CONTACT] > 0.5 else 0
+    return 0
+
+
+@numba.njit(cache=True)
+def preferred_method(system, mode, p):
+    """Stepper for automatic selection: 1 Dormand-Prince 5(4), 2 RODAS4, 3 DOP853."""
+    if system == CAM_FOLLOWER:
+        # Measured (docs/integrator.md): on the sustained, lightly damped contact of the
+        # chapter 4 rig RODAS4 suffers order reduction at |h omega_contact| ~ 1 and needs
+        # more steps than the explicit methods at equal accuracy, and impacts are not
+        # stiff; DOP853 needs the fewest right-hand-side calls in both regimes.
+        return 3
+    if system == RIGID_IMPACT or system == COUPLED_OSCILLATORS:
+        return 3
+    return 2 if p[4] > 0.5 else 1
+
+
+@numba.njit(cache=True)
+def monitor(system, t, y, mode, p):
+    if system == CAM_FOLLOWER:
+        # peak force of impacts only (the impact table); free flight and sustained
+        # contact cost nothing
+        if mode[L.MODE_CONTACT] > 0.5 and mode[L.MODE_IMPACT] > 0.5:
+            return dynamics.evaluate(t, y[0], y[1], mode, p)[1]
+        return 0.0
+    return abs(y[0])
