@@ -7,6 +7,7 @@ for bad input, 1 for a failure at run time, 130 for Ctrl-C and 143 for SIGTERM
 
 from __future__ import annotations
 
+import _thread
 import functools
 import os
 import signal
@@ -99,9 +100,13 @@ def _on_signal(signum, frame):
 
 
 def _quiet_unraisable(unraisable) -> None:
-    """Drop the 'Exception ignored' report of an interrupt inside a C callback."""
+    """Drop the 'Exception ignored' report of an interrupt inside a C callback, and deliver
+    the interrupt again to the main thread (the callback swallowed it: the command would
+    otherwise run on to its end)."""
     if not isinstance(unraisable.exc_value, KeyboardInterrupt):
         sys.__unraisablehook__(unraisable)
+    elif _interrupt["arrived"]:
+        _thread.interrupt_main(int(_interrupt["signal"]))
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
@@ -165,7 +170,7 @@ def main(argv=None) -> int:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         warnings.showwarning, sys.unraisablehook = hooks
-    if result == 130:   # typer's exit status for KeyboardInterrupt
+    if result == 130 or _interrupt["arrived"]:   # typer's status for KeyboardInterrupt; or one swallowed
         return _interrupted(None)
     return result if isinstance(result, int) else 0
 
