@@ -318,10 +318,18 @@ def notes(results):
 
 
 def plot(results, path):
-    """Two panels, error against ms/rev, one line per tool."""
-    import matplotlib
-    matplotlib.use("Agg")
+    """Two panels, error against ms/rev, one line per tool; in camdyn's figure style and
+    saved through its overlap check (tests/test_gallery_examples.py draws it from
+    peers.json)."""
     import matplotlib.pyplot as plt
+
+    from camdyn.plotting.style import figure_style, save_figure
+
+    with figure_style():
+        _draw(results, path, plt, save_figure)
+
+
+def _draw(results, path, plt, save_figure):
 
     labels = list(results["cases"])
     fig, axes = plt.subplots(1, len(labels), figsize=(6.2 * len(labels), 5.2), layout="constrained")
@@ -333,16 +341,15 @@ def plot(results, path):
             style = dict(color="black", lw=2.2) if name.startswith("camdyn") else dict(color=colours[i % 10], lw=1.3)
             ax.plot([r["error"] for r in ok], [r["ms_per_rev"] for r in ok], marker=markers[i % len(markers)],
                     ms=5, ls="--" if "core" in name or "Python" in name else "-", label=name, **style)
-        ax.set(xscale="log", yscale="log", title=label, xlabel="error, max |α − α_true| / max |α_true| [–]",
-               ylabel="time per cam revolution [ms/rev]")
+        ax.set(xscale="log", yscale="log", title=label, xlabel="error max|α − α_true| / max|α_true| [–]",
+               ylabel="time per revolution [ms]")
         ax.grid(True, which="major", alpha=0.3)
     handles, names = np.atleast_1d(axes)[0].get_legend_handles_labels()
     fig.legend(handles, names, loc="outside lower center", ncols=4, frameon=False)
     fig.suptitle(f"Work-precision, {results['revolutions']} revolutions at 20 kHz (best of "
                  f"{results['settings']['rounds']}, interleaved)")
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=130, bbox_inches="tight")
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def machine():
@@ -372,7 +379,11 @@ def main():
     parser.add_argument("--quick", action="store_true", help="3 rungs, 1 round, 5 revolutions; outputs to the temp dir")
     parser.add_argument("--budget", type=float, default=60.0,
                         help="a tool whose best run passes this many seconds skips tighter rungs [s]")
+    parser.add_argument("--redraw", action="store_true", help="only draw the figure again from peers.json")
     args = parser.parse_args()
+    if args.redraw:
+        plot(json.loads((HERE / "peers.json").read_text()), HERE.parent / "docs/figures/work_precision.png")
+        return
     revolutions, rtols, rounds = (5, QUICK_RTOLS, 1) if args.quick else (30, RTOLS, 3)
     scratch = Path(tempfile.gettempdir())
     out_json = scratch / "peers-quick.json" if args.quick else HERE / "peers.json"

@@ -43,3 +43,25 @@ def test_the_gallery_figures_are_in_the_house_style(script, no_open_figures, cap
         assert labels and all(label.endswith("]") and " [" in label for label in labels), labels
         assert not any("[rad]" in label for label in labels), labels
         assert layout_problems(fig) == []
+
+
+def test_the_work_precision_figure_is_readable(tmp_path, monkeypatch):
+    # the README's benchmark figure, drawn again from its recorded results
+    # (benchmarks/bench_peers.py --redraw), through the same overlap check
+    import json
+    import sys
+
+    from camdyn.plotting import style
+
+    benchmarks = Path(__file__).resolve().parents[1] / "benchmarks"
+    monkeypatch.syspath_prepend(str(benchmarks))
+    seen = []
+    monkeypatch.setattr(style, "SAVE_HOOKS", [lambda fig: seen.append(layout_problems(fig))])
+    bench_peers = __import__("bench_peers")
+    try:
+        bench_peers.plot(json.loads((benchmarks / "peers.json").read_text()), tmp_path / "work_precision.png")
+    finally:
+        sys.modules.pop("bench_peers", None)
+        sys.modules.pop("peer_models", None)
+    assert seen == [[]]
+    assert (tmp_path / "work_precision.png").stat().st_size > 10_000
