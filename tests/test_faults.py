@@ -146,9 +146,11 @@ def test_sigkill_of_a_sweep_leaves_no_worker_behind(tmp_path):
     workers = _children(proc.pid)
     assert workers
     os.kill(proc.pid, signal.SIGKILL)
-    proc.communicate(timeout=30)
+    proc.wait(timeout=30)   # not communicate(): the workers hold the pipes until they leave
     # each worker watches its parent every 0.5 s and leaves when it is gone
-    assert _wait_for(lambda: not any(_alive(w) for w in workers), timeout=10), "orphaned workers"
+    gone = _wait_for(lambda: not any(_alive(w) for w in workers), timeout=10)
+    proc.communicate(timeout=30)
+    assert gone, "orphaned workers"
 
 
 @pytest.mark.slow

@@ -65,10 +65,13 @@ def start_local(threads: int = 1, point=None) -> None:
     connections before its interpreter ends), so it flushes them and leaves by
     ``os._exit`` once it has been told to stop.
     """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)   # the parent handles Ctrl-C and stops the workers
+    # watch the parent from the start: warming may mean loading or compiling the kernel
+    # (seconds, a minute on a fresh checkout), and a parent killed meanwhile must not
+    # leave the worker behind
+    threading.Thread(target=_watch_parent, args=(os.getppid(),), daemon=True, name="camdyn-parent-watch").start()
     warm(threads, point)
     atexit.register(_leave)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)   # the parent handles Ctrl-C and stops the workers
-    threading.Thread(target=_watch_parent, args=(os.getppid(),), daemon=True, name="camdyn-parent-watch").start()
 
 
 def _watch_parent(parent: int, interval: float = 0.5) -> None:
