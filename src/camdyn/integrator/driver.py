@@ -124,10 +124,11 @@ def _allocate(system, y_start, n_out, max_events):
         raise ValueError("the initial state's size is not the system's state_size")
     m = systems.guard_count(system)
     y_out = np.full((n_out, n), np.nan)
-    mode_out = np.full((n_out, systems.mode_size(system)), np.nan)
+    modes = systems.mode_size(system)
+    mode_out = np.full((n_out, modes), np.nan)
     events = np.empty((max_events, EVENT_GUARDS + m + n))
     counters = np.zeros(COUNT_SIZE, dtype=np.int64)
-    return y_out, mode_out, events, counters, y_start.copy(), np.zeros(systems.mode_size(system))
+    return y_out, mode_out, events, counters, y_start.copy(), np.zeros(modes)
 
 
 @numba.njit(cache=True, inline="always")

@@ -216,14 +216,10 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
     n_out = limits.check_sampling(sample_rate, period, duration)
     limits.check_memory(limits.result_bytes(n_out, 3 + len(CHANNELS)), "the simulation's result")
     prep = prepare(system)
-    y0 = prep.y0.copy()
-    if initial_state is not None:
-        y0[0], y0[1] = float(initial_state[0]), float(initial_state[1])
-        if not np.all(np.isfinite(y0)):
-            raise ParameterError("initial_state must be finite")
+    y0 = starting_state(prep, initial_state)
     t_out = np.minimum(np.arange(n_out) / sample_rate, duration)  # the last sample may round past the end
     if max_step is None:
-        max_step = period / 32.0 if math.isfinite(period) else duration / 64.0
+        max_step = default_max_step(period, duration)
     max_events = int(64 + 16 * (duration / period if math.isfinite(period) else 100))
     start = _time.perf_counter()
     y, modes, events, counters = driver.integrate(
@@ -247,6 +243,23 @@ STATE_VARIABLES = (
 )
 #: Every name :func:`simulate` accepts in ``variables``.
 VARIABLES = tuple(name for name, _, _ in STATE_VARIABLES + CHANNELS) + ("impact",)
+
+
+def starting_state(prep: Prepared, initial_state=None) -> np.ndarray:
+    """The state a run starts from: the prepared static equilibrium, or ``initial_state``
+    ``(alpha [rad], alpha_dot [rad/s])`` in its place (refused unless finite)."""
+    y0 = prep.y0.copy()
+    if initial_state is not None:
+        y0[0], y0[1] = float(initial_state[0]), float(initial_state[1])
+        if not np.all(np.isfinite(y0)):
+            raise ParameterError("initial_state must be finite")
+    return y0
+
+
+def default_max_step(period: float, duration: float) -> float:
+    """The largest step [s] by default: 1/32 of the cam period [s], or 1/64 of the
+    duration [s] when the cam stands still."""
+    return period / 32.0 if math.isfinite(period) else duration / 64.0
 
 
 def check_variables(variables) -> frozenset:

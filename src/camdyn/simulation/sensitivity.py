@@ -17,7 +17,7 @@ from camdyn.errors import ParameterError, SimulationError
 from camdyn.integrator import driver
 from camdyn.params.system import System
 from camdyn.simulation import limits
-from camdyn.simulation.runner import prepare, with_speed
+from camdyn.simulation.runner import default_max_step, prepare, starting_state, with_speed
 from camdyn.systems import registry as systems
 
 __all__ = ["Sensitivity", "state_transition", "integrate_variational"]
@@ -101,11 +101,5 @@ def state_transition(system: System, duration: float | None = None, speed=None, 
     if not (math.isfinite(duration) and duration > 0):
         raise ParameterError(f"duration must be positive, got {duration!r}")
     prep = prepare(system)
-    y0 = prep.y0.copy()
-    if initial_state is not None:
-        y0[0], y0[1] = float(initial_state[0]), float(initial_state[1])
-        if not np.all(np.isfinite(y0)):
-            raise ParameterError("initial_state must be finite")
-    max_step = period / 32.0 if math.isfinite(period) else duration / 64.0
-    return integrate_variational(systems.CAM_FOLLOWER, prep.p, y0, float(t_start), float(t_start) + duration,
-                                 rtol, atol, max_step)
+    return integrate_variational(systems.CAM_FOLLOWER, prep.p, starting_state(prep, initial_state), float(t_start),
+                                 float(t_start) + duration, rtol, atol, default_max_step(period, duration))
