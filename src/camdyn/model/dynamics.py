@@ -29,7 +29,7 @@ from camdyn.model.geometry import (
     contact_rates_trig,
 )
 
-__all__ = ["spring_force", "spring_moment", "evaluate", "rhs", "guards"]
+__all__ = ["spring_force", "spring_moment", "evaluate", "evaluate_cam", "rhs", "guards"]
 
 
 @numba.njit(cache=True)
@@ -93,6 +93,14 @@ def evaluate_shifted(t, alpha, alpha_dot, mode, p, delta_shift):
         delta_dot [m/s], vr [m/s], theta [rad], theta_dot [rad/s], P_cam [W], Fk [N])``
     """
     theta, theta_dot = cam_angle(t, p)
+    return evaluate_cam(theta, theta_dot, alpha, alpha_dot, mode, p, delta_shift)
+
+
+@numba.njit(cache=True)
+def evaluate_cam(theta, theta_dot, alpha, alpha_dot, mode, p, delta_shift):
+    """:func:`evaluate_shifted` at a given cam angle ``theta`` [rad] and speed
+    ``theta_dot`` [rad/s] instead of the prescribed motion (the cam as a body,
+    :mod:`camdyn.model.driven_cam`, takes them from its state); same returns."""
     ca = math.cos(alpha)
     sa = math.sin(alpha)
     delta, delta_dot, chi, rho_c, vr, n_v, u_v = contact_kinematics_trig(

@@ -37,17 +37,22 @@ import numba
 import numpy as np
 
 from camdyn.model import coupled_oscillator, dynamics, impact_oscillator
+from camdyn.model import driven_cam, stick_slip
 from camdyn.model import layout as L
 
 CAM_FOLLOWER = 0
 OSCILLATOR = 1
 RIGID_IMPACT = 2
 COUPLED_OSCILLATORS = 3
+# --- mechanisms (ids 5 and up; their branches are the blocks marked "mechanisms" below)
+STICK_SLIP = 5
 
 
 @numba.njit(cache=True)
 def state_size(system):
     """Number of state components."""
+    if system >= STICK_SLIP:   # mechanisms
+        return _mechanism_sizes(system)[0]
     if system == COUPLED_OSCILLATORS:
         return coupled_oscillator.STATE_SIZE
     return 3
@@ -57,6 +62,8 @@ def state_size(system):
 def controlled_size(system):
     """Number of leading state components under error control: the cam-follower's and
     the oscillators' third component is a quadrature that feeds back into nothing."""
+    if system >= STICK_SLIP:   # mechanisms
+        return _mechanism_sizes(system)[1]
     if system == COUPLED_OSCILLATORS:
         return coupled_oscillator.STATE_SIZE
     return 2
@@ -65,6 +72,8 @@ def controlled_size(system):
 @numba.njit(cache=True)
 def guard_count(system):
     """Number of guard functions."""
+    if system >= STICK_SLIP:   # mechanisms
+        return _mechanism_sizes(system)[2]
     if system == CAM_FOLLOWER:
         return 3
     return 1
@@ -73,6 +82,8 @@ def guard_count(system):
 @numba.njit(cache=True)
 def mode_size(system):
     """Number of slots of the mode vector."""
+    if system >= STICK_SLIP:   # mechanisms
+        return _mechanism_sizes(system)[3]
     if system == CAM_FOLLOWER:
         return L.MODE_SIZE
     return 1
@@ -88,6 +99,9 @@ def _osc_rhs(t, y, p, dydt):
 
 @numba.njit(cache=True)
 def rhs(system, t, y, mode, p, dydt):
+    if system >= STICK_SLIP:   # mechanisms
+        _mechanism_rhs(system, t, y, mode, p, dydt)
+        return
     if system == CAM_FOLLOWER:
         dynamics.rhs(t, y, mode, p, dydt)
     elif system == COUPLED_OSCILLATORS:
@@ -102,6 +116,9 @@ def rhs_inline(system, t, y, mode, p, dydt):
     it saves a call and the reference counting of its array arguments per evaluation,
     about a fifth of a DOP853 step; the other callers keep the call, which compiles
     faster."""
+    if system >= STICK_SLIP:   # mechanisms
+        _mechanism_rhs(system, t, y, mode, p, dydt)
+        return
     if system == CAM_FOLLOWER:
         dynamics.rhs(t, y, mode, p, dydt)
     elif system == COUPLED_OSCILLATORS:
@@ -113,6 +130,9 @@ def rhs_inline(system, t, y, mode, p, dydt):
 @numba.njit(cache=True)
 def jacobian(system, t, y, f0, mode, p, jac):
     """The Jacobian ``jac = d f / d y`` (n x n) at ``(t, y)``, where ``f0 = f(t, y)``."""
+    if system >= STICK_SLIP:   # mechanisms
+        _mechanism_jacobian(system, t, y, f0, mode, p, jac)
+        return
     if system == COUPLED_OSCILLATORS:
         coupled_oscillator.jacobian(p, jac)
         return
@@ -129,6 +149,9 @@ def jacobian(system, t, y, f0, mode, p, jac):
 
 @numba.njit(cache=True)
 def guards(system, t, y, f, known, p, values, rates):
+    if system >= STICK_SLIP:   # mechanisms
+        _mechanism_guards(system, t, y, f, known, p, values, rates)
+        return
     if system == CAM_FOLLOWER:
         dynamics.guards(t, y, f[1] if known else math.nan, p, values, rates)
     elif system == RIGID_IMPACT:
@@ -142,6 +165,8 @@ def guards(system, t, y, f, known, p, values, rates):
 
 @numba.njit(cache=True)
 def expected_sign(system, k, mode, p):
+    if system >= STICK_SLIP:   # mechanisms
+        return _mechanism_expected_sign(system, k, mode, p)
     if system == CAM_FOLLOWER:
         contact = mode[L.MODE_CONTACT] > 0.5
         if k == 0:
@@ -164,6 +189,9 @@ def expected_sign(system, k, mode, p):
 
 @numba.njit(cache=True)
 def transition(system, k, t, y, values, mode, p):
+    if system >= STICK_SLIP:   # mechanisms
+        _mechanism_transition(system, k, t, y, values, mode, p)
+        return
     if system == CAM_FOLLOWER:
         if k == 0:
             if mode[L.MODE_CONTACT] > 0.5:
@@ -193,6 +221,9 @@ def transition(system, k, t, y, values, mode, p):
 
 @numba.njit(cache=True)
 def initial_mode(system, t, y, p, mode):
+    if system >= STICK_SLIP:   # mechanisms
+        _mechanism_initial_mode(system, t, y, p, mode)
+        return
     values = np.empty(guard_count(system))
     rates = np.empty(guard_count(system))
     guards(system, t, y, y, False, p, values, rates)
@@ -210,6 +241,8 @@ def initial_mode(system, t, y, p, mode):
 def regime(system, mode, p):
     """Index (0 or 1) of the dynamic regime of a mode; the driver remembers the last step
     size of each regime, so that a step after an event starts at the right scale."""
+    if system >= STICK_SLIP:   # mechanisms
+        return _mechanism_regime(system, mode, p)
     if system == CAM_FOLLOWER:
         return 1 if mode[L.MODE_CONTACT] > 0.5 else 0
     return 0
@@ -218,6 +251,8 @@ def regime(system, mode, p):
 @numba.njit(cache=True)
 def preferred_method(system, mode, p):
     """Stepper for automatic selection: 1 Dormand-Prince 5(4), 2 RODAS4, 3 DOP853."""
+    if system >= STICK_SLIP:   # mechanisms
+        return 3
     if system == CAM_FOLLOWER:
         # Measured (docs/integrator.md): on the sustained, lightly damped contact of the
         # chapter 4 rig RODAS4 suffers order reduction at |h omega_contact| ~ 1 and needs
@@ -231,6 +266,8 @@ def preferred_method(system, mode, p):
 
 @numba.njit(cache=True)
 def monitor(system, t, y, mode, p):
+    if system >= STICK_SLIP:   # mechanisms
+        return _mechanism_monitor(system, t, y, mode, p)
     if system == CAM_FOLLOWER:
         # peak force of impacts only (the impact table); free flight and sustained
         # contact cost nothing
@@ -238,3 +275,78 @@ def monitor(system, t, y, mode, p):
             return dynamics.evaluate(t, y[0], y[1], mode, p)[1]
         return 0.0
     return abs(y[0])
+
+
+# --- mechanisms: the stick-slip oscillator (5) and the cam as a rigid body (6) --------
+DRIVEN_CAM = 6
+
+
+@numba.njit(cache=True)
+def _mechanism_sizes(system):
+    """``(state_size, controlled_size, guard_count, mode_size)`` of a mechanism."""
+    if system == STICK_SLIP:
+        return stick_slip.STATE_SIZE, 2, stick_slip.GUARD_COUNT, 1
+    return driven_cam.STATE_SIZE, driven_cam.CONTROLLED_SIZE, driven_cam.GUARD_COUNT, L.MODE_SIZE
+
+
+@numba.njit(cache=True)
+def _mechanism_rhs(system, t, y, mode, p, dydt):
+    if system == STICK_SLIP:
+        stick_slip.rhs(t, y, mode, p, dydt)
+    else:
+        driven_cam.rhs(t, y, mode, p, dydt)
+
+
+@numba.njit(cache=True)
+def _mechanism_jacobian(system, t, y, f0, mode, p, jac):
+    if system == STICK_SLIP:
+        stick_slip.jacobian(t, y, mode, p, jac)
+    else:
+        driven_cam.jacobian(t, y, mode, p, jac)
+
+
+@numba.njit(cache=True)
+def _mechanism_guards(system, t, y, f, known, p, values, rates):
+    if system == STICK_SLIP:
+        stick_slip.guards(t, y, f, known, p, values, rates)
+    else:
+        driven_cam.guards(t, y, f, known, p, values, rates)
+
+
+@numba.njit(cache=True)
+def _mechanism_expected_sign(system, k, mode, p):
+    if system == STICK_SLIP:
+        return stick_slip.expected_sign(k, mode, p)
+    return driven_cam.expected_sign(k, mode, p)
+
+
+@numba.njit(cache=True)
+def _mechanism_transition(system, k, t, y, values, mode, p):
+    if system == STICK_SLIP:
+        stick_slip.transition(k, t, y, mode, p)
+    else:
+        driven_cam.transition(k, values, mode)
+
+
+@numba.njit(cache=True)
+def _mechanism_initial_mode(system, t, y, p, mode):
+    if system == STICK_SLIP:
+        stick_slip.initial_mode(t, y, p, mode)
+    else:
+        driven_cam.initial_mode(t, y, p, mode)
+
+
+@numba.njit(cache=True)
+def _mechanism_regime(system, mode, p):
+    """Sticking and slipping (stick-slip), free flight and contact (driven cam)."""
+    if system == STICK_SLIP:
+        return 0 if mode[0] == 0.0 else 1
+    return 1 if mode[L.MODE_CONTACT] > 0.5 else 0
+
+
+@numba.njit(cache=True)
+def _mechanism_monitor(system, t, y, mode, p):
+    """The extension ``|x|`` [m] (stick-slip); an impact's normal force [N] (driven cam)."""
+    if system == STICK_SLIP:
+        return abs(y[0])
+    return driven_cam.monitor(t, y, mode, p)

@@ -16,9 +16,11 @@ import numba
 
 from camdyn.systems import models, variational
 from camdyn.systems.models import CAM_FOLLOWER, COUPLED_OSCILLATORS, OSCILLATOR, RIGID_IMPACT
+from camdyn.systems.models import DRIVEN_CAM, STICK_SLIP
 from camdyn.systems.variational import VARIATIONAL
 
-__all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", "VARIATIONAL", "state_size",
+__all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", "STICK_SLIP", "DRIVEN_CAM",
+           "VARIATIONAL", "state_size",
            "controlled_size", "guard_count", "mode_size", "rhs", "rhs_inline", "jacobian", "guards",
            "expected_sign", "transition", "initial_mode", "regime", "preferred_method", "monitor"]
 
