@@ -241,3 +241,40 @@ def monitor(t, y, mode, p):
     if mode[L.MODE_CONTACT] > 0.5 and mode[L.MODE_IMPACT] > 0.5:
         return evaluate_cam(y[2], y[3], y[0], y[1], mode, p, 0.0)[1]
     return 0.0
+
+
+#: name, unit, long name of each derived channel of :func:`channels`, in column order.
+CHANNELS = (
+    ("alpha_ddot", "rad/s^2", "follower angular acceleration"),
+    ("cam_acceleration", "rad/s^2", "cam shaft angular acceleration Theta_ddot"),
+    ("drive_torque", "N m", "drive torque on the cam shaft"),
+    ("bearing_torque", "N m", "bearing friction torque (opposing the rotation)"),
+    ("contact_torque", "N m", "moment of the follower's reaction on the cam about its pivot"),
+    ("Fn", "N", "normal contact force on the follower"),
+    ("Ff", "N", "friction force on the follower along the bar (u)"),
+    ("penetration", "m", "contact penetration delta (negative: gap)"),
+    ("in_contact", "1", "1 while the follower touches the cam"),
+)
+
+
+@numba.njit(cache=True)
+def channels(y, modes, p):
+    """Channels of :data:`CHANNELS` at the sampled states ``y`` (n, 8) and modes ``modes``
+    (n, mode size); NaN rows where the state is NaN (a run that stopped early)."""
+    n = y.shape[0]
+    out = np.full((n, len(CHANNELS)), np.nan)
+    for i in range(n):
+        if math.isnan(y[i, 0]):
+            continue
+        alpha_ddot, theta_ddot, drive, bearing, torque, power, fn, ff = accelerations(y[i], modes[i], p)
+        row = out[i]
+        row[0] = alpha_ddot
+        row[1] = theta_ddot
+        row[2] = drive
+        row[3] = bearing
+        row[4] = torque
+        row[5] = fn
+        row[6] = ff
+        row[7] = evaluate_cam(y[i, 2], y[i, 3], y[i, 0], y[i, 1], modes[i], p, 0.0)[5]
+        row[8] = modes[i, L.MODE_CONTACT]
+    return out

@@ -36,8 +36,7 @@ import math
 import numba
 import numpy as np
 
-from camdyn.model import coupled_oscillator, dynamics, impact_oscillator
-from camdyn.model import driven_cam, stick_slip
+from camdyn.model import coupled_oscillator, driven_cam, dynamics, impact_oscillator, stick_slip
 from camdyn.model import layout as L
 
 CAM_FOLLOWER = 0

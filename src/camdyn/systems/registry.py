@@ -15,8 +15,7 @@ from __future__ import annotations
 import numba
 
 from camdyn.systems import models, variational
-from camdyn.systems.models import CAM_FOLLOWER, COUPLED_OSCILLATORS, OSCILLATOR, RIGID_IMPACT
-from camdyn.systems.models import DRIVEN_CAM, STICK_SLIP
+from camdyn.systems.models import CAM_FOLLOWER, COUPLED_OSCILLATORS, DRIVEN_CAM, OSCILLATOR, RIGID_IMPACT, STICK_SLIP
 from camdyn.systems.variational import VARIATIONAL
 
 __all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", "STICK_SLIP", "DRIVEN_CAM",
