@@ -14,6 +14,8 @@ Jobs (default: all but the slow ones):
 - ``tribology``: ``python examples/tribology_design.py`` -> design maps, contact
   conditions, Benedict-Kelley;
 - ``restitution``: ``python examples/restitution_laws.py`` -> restitution_laws.png;
+- ``mechanisms``: ``python examples/mechanisms.py`` -> mechanisms_speed_fluctuation.png,
+  stick_slip_cycle.png;
 - slow (``--slow``, about 20 minutes more): ``friction_tables``, ``impact_tables`` and
   ``gallery`` (the rest of chapter 2). These scripts also rewrite their tables in docs/.
 
@@ -56,6 +58,8 @@ SOURCES = {
     "benedict_kelley.png": "python examples/tribology_design.py",
     "work_precision.png": "make bench-peers (python benchmarks/bench_peers.py)",
     "restitution_laws.png": "python examples/restitution_laws.py",
+    "mechanisms_speed_fluctuation.png": "python examples/mechanisms.py",
+    "stick_slip_cycle.png": "python examples/mechanisms.py",
     "friction_errors.png": "python examples/friction_error_tables.py",
     "impact_hysteresis.png": "python examples/impact_damping_tables.py",
     "impact_residue_landscape.png": "python examples/impact_damping_tables.py",
@@ -196,7 +200,9 @@ def _script(name: str, figures: tuple[str, ...], args: tuple[str, ...] = (), dat
 JOBS = {"demo": job_demo, "sweeps": job_sweeps, "fig2_9": job_fig2_9,
         "tribology": _script("tribology_design.py", tuple(k for k, v in SOURCES.items() if v.endswith("design.py")),
                              data=True),
-        "restitution": job_restitution}
+        "restitution": job_restitution,
+        "mechanisms": _script("mechanisms.py", ("mechanisms_speed_fluctuation.png", "stick_slip_cycle.png"),
+                              data=True)}
 SLOW = {"friction_tables": _script("friction_error_tables.py", ("friction_errors.png",), data=True),
         "impact_tables": _script("impact_damping_tables.py",
                                  ("impact_hysteresis.png", "impact_residue_landscape.png", "restitution_fit.png")),

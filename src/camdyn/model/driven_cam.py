@@ -69,7 +69,8 @@ STATE_SIZE = 8
 CONTROLLED_SIZE = 5
 GUARD_COUNT = 3
 
-__all__ = ["drive_torque", "bearing_torque", "contact_torque", "accelerations", "rhs", "jacobian", "guards",
+__all__ = ["drive_torque", "bearing_torque", "contact_torque", "contact_torque_parts", "channels", "CHANNELS",
+           "accelerations", "rhs", "jacobian", "guards",
            "expected_sign", "transition", "initial_mode", "SIZE", "STATE_SIZE", "DRIVE_KINDS"]
 
 
@@ -96,16 +97,25 @@ def bearing_torque(theta_dot, p):
 
 
 @numba.njit(cache=True)
-def contact_torque(alpha, theta, fn, ff, p):
-    """Counter-clockwise moment about the cam pivot E [N m] of the follower's reaction on
-    the cam, eq (2), for a normal force ``fn`` [N] and a friction force ``ff`` [N] on the
-    follower along ``u``. The lever arms are the cam's material velocity at the contact
-    point for a unit shaft speed (:func:`camdyn.model.geometry.contact_kinematics_trig`)."""
+def contact_torque_parts(alpha, theta, fn, ff, p):
+    """The two terms of eq (2) [N m]: the counter-clockwise moments about the cam pivot E
+    of the normal reaction ``+Fn n`` and of the friction reaction ``-Ff u`` on the cam,
+    for a normal force ``fn`` [N] and a friction force ``ff`` [N] on the follower along
+    ``u``. The lever arms are the cam's material velocity at the contact point for a unit
+    shaft speed (:func:`camdyn.model.geometry.contact_kinematics_trig`)."""
     ca = math.cos(alpha)
     sa = math.sin(alpha)
     delta, delta_dot, chi, rho_c, vr, n_arm, u_arm = contact_kinematics_trig(
         ca, sa, math.cos(theta), math.sin(theta), 0.0, 1.0, p)
-    return fn * n_arm - ff * u_arm
+    return fn * n_arm, -ff * u_arm
+
+
+@numba.njit(cache=True)
+def contact_torque(alpha, theta, fn, ff, p):
+    """Counter-clockwise moment about the cam pivot E [N m] of the follower's reaction on
+    the cam, eq (2) (the sum of :func:`contact_torque_parts`)."""
+    normal, friction = contact_torque_parts(alpha, theta, fn, ff, p)
+    return normal + friction
 
 
 @numba.njit(cache=True)
@@ -250,6 +260,7 @@ CHANNELS = (
     ("drive_torque", "N m", "drive torque on the cam shaft"),
     ("bearing_torque", "N m", "bearing friction torque (opposing the rotation)"),
     ("contact_torque", "N m", "moment of the follower's reaction on the cam about its pivot"),
+    ("friction_torque", "N m", "moment of the contact friction on the cam about its pivot (part of contact_torque)"),
     ("Fn", "N", "normal contact force on the follower"),
     ("Ff", "N", "friction force on the follower along the bar (u)"),
     ("penetration", "m", "contact penetration delta (negative: gap)"),
@@ -273,8 +284,9 @@ def channels(y, modes, p):
         row[2] = drive
         row[3] = bearing
         row[4] = torque
-        row[5] = fn
-        row[6] = ff
-        row[7] = evaluate_cam(y[i, 2], y[i, 3], y[i, 0], y[i, 1], modes[i], p, 0.0)[5]
-        row[8] = modes[i, L.MODE_CONTACT]
+        row[5] = contact_torque_parts(y[i, 0], y[i, 2], fn, ff, p)[1]
+        row[6] = fn
+        row[7] = ff
+        row[8] = evaluate_cam(y[i, 2], y[i, 3], y[i, 0], y[i, 1], modes[i], p, 0.0)[5]
+        row[9] = modes[i, L.MODE_CONTACT]
     return out
