@@ -144,3 +144,26 @@ def test_an_oscillating_cam_is_refused(friction_rig):
     s = friction_rig.with_values(**{"motion.kind": "oscillating", "motion.amplitude": 0.6, "motion.frequency": 3.0})
     with pytest.raises(ParameterError, match="constant motion"):
         simulate_driven_cam(s, CamDrive(shaft_inertia=1.0))
+
+
+def test_bad_run_settings_are_refused(friction_rig):
+    drive = CamDrive(shaft_inertia=1e-3)
+    with pytest.raises(ParameterError, match="duration"):
+        simulate_driven_cam(friction_rig, drive, duration=-1.0)
+    with pytest.raises(ParameterError, match="give a duration"):
+        simulate_driven_cam(friction_rig, drive, initial_speed=0.0)
+    with pytest.raises(ParameterError, match="initial_speed must be finite"):
+        simulate_driven_cam(friction_rig, drive, initial_speed=math.inf)
+
+
+def test_the_rosenbrock_stepper_agrees_with_dop853(friction_rig):
+    # the driven cam's Jacobian (central differences) serves RODAS4: the same run by
+    # both steppers agrees far inside the 1e-6 the tests above use
+    s = friction_rig.with_values(**{"motion.speed": 11.55, "friction.law": "tanh"})
+    drive = CamDrive(shaft_inertia=1e-4, kind="controller", proportional=0.02, integral=0.5,
+                     target_speed=s.motion.angular_speed)
+    runs = [simulate_driven_cam(s, drive, revolutions=0.5, sample_rate=5e3, rtol=1e-10, atol=1e-12, method=m)
+            for m in ("dop853", "rosenbrock")]
+    for name in ("alpha", "cam_speed"):
+        scale = np.max(np.abs(runs[0][name].values))
+        np.testing.assert_allclose(runs[1][name].values, runs[0][name].values, rtol=0, atol=1e-6 * scale)

@@ -11,6 +11,7 @@ from scipy.integrate import solve_ivp
 from camdyn.errors import ParameterError
 from camdyn.integrator import driver
 from camdyn.model import stick_slip
+from camdyn.simulation.mechanisms import simulate_stick_slip
 from camdyn.systems import registry as systems
 
 SYSTEM = systems.STICK_SLIP
@@ -154,3 +155,28 @@ def test_bad_parameters_are_refused(kwargs, words):
     values = dict(mass=M, stiffness=K, belt_speed=V, static_friction=MU_S, kinetic_friction=MU_K) | kwargs
     with pytest.raises(ParameterError, match=words):
         stick_slip.pack(**values)
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(initial_state=(0.0, math.inf)), "initial_state must be two finite numbers"),
+    (dict(duration=-1.0), "duration must be positive"),
+    (dict(method="euler"), "method must be one of"),
+])
+def test_bad_run_settings_are_refused(kwargs, words):
+    values = dict(mass=M, stiffness=K, belt_speed=V, static_friction=MU_S, kinetic_friction=MU_K, duration=1.0)
+    with pytest.raises(ParameterError, match=words):
+        simulate_stick_slip(**(values | kwargs))
+
+
+def test_the_dataset_reports_the_switches_with_units():
+    ds = simulate_stick_slip(mass=M, stiffness=K, belt_speed=V, static_friction=MU_S, kinetic_friction=MU_K,
+                             gravity=G, duration=2.0, sample_rate=2e3)
+    c = _closed_form_cycle()
+    assert ds.x.attrs["units"] == "m" and ds.friction_heat.attrs["units"] == "J"
+    kinds = list(ds.transition_kind.values)
+    assert kinds[:4] == ["stick", "slip", "stick", "slip"]   # from rest: slip, then the cycle
+    np.testing.assert_allclose(ds.transition_x.values[1::2], c["x_b"], rtol=1e-8)   # breakaways
+    # while sticking the belt holds the spring: friction force k x, within mu_s N
+    sticking = ds.sticking.values == 1
+    np.testing.assert_allclose(ds.friction_force.values[sticking], K * ds.x.values[sticking], rtol=1e-12)
+    assert np.all(np.abs(ds.friction_force.values) <= MU_S * N * (1 + 1e-12))

@@ -23,7 +23,11 @@ linear oscillator with a closed-form solution, and system 2 the same oscillator 
 a rigid wall with Newton's restitution (:mod:`camdyn.model.impact_oscillator`), whose
 impacts reset the state in :func:`transition`; system 3 is two coupled oscillators, the
 second against a wall (:mod:`camdyn.model.coupled_oscillator`, 4 states, 1 guard). The
-three test the integrator.
+three test the integrator. The mechanisms, ids 5 and up, sit in one block at the end of
+this module, each function here sending them there in its first lines: system 5 is the
+stick-slip oscillator (:mod:`camdyn.model.stick_slip`, 3 states, 3 guards) and system 6
+the cam-follower with the cam as a rigid body on a driven shaft
+(:mod:`camdyn.model.driven_cam`, 8 states, the cam-follower's 3 guards and modes).
 
 A new model gets an id here and a branch in each function; this module is the only one
 that imports the models.
