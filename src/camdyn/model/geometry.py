@@ -30,13 +30,28 @@ def cam_angle(t, p):
     """Cam angle ``Theta`` [rad] and speed ``Theta_dot`` [rad/s] at time ``t`` [s].
 
     Constant motion ``Theta0 + Omega t``; oscillating motion
-    ``Theta0 + 0.5 Theta_p sin(omega_c t)`` (thesis 2.7.2).
+    ``Theta0 + 0.5 Theta_p sin(omega_c t)`` (thesis 2.7.2); a ramp from ``Omega0`` to
+    ``Omega`` over ``T``: ``Theta0 + Omega0 t + 0.5 (Omega - Omega0) t^2 / T`` until ``T``,
+    then ``Theta0 + 0.5 (Omega0 + Omega) T + Omega (t - T)`` (uniform acceleration).
     """
     if p[L.MOTION_KIND] == 0.0:
         return p[L.THETA0] + p[L.OMEGA] * t, p[L.OMEGA]
+    if p[L.MOTION_KIND] == 2.0:
+        return _ramp_angle(t, p)
     half = 0.5 * p[L.SWING]
     w = p[L.OMEGA_C]
     return p[L.THETA0] + half * math.sin(w * t), half * w * math.cos(w * t)
+
+
+@numba.njit(cache=True)
+def _ramp_angle(t, p):
+    """Cam angle [rad] and speed [rad/s] of the ramp of :func:`cam_angle`."""
+    start = p[L.START_OMEGA]
+    end = p[L.OMEGA]
+    duration = p[L.RAMP_TIME]
+    if t < duration:
+        return p[L.THETA0] + start * t + 0.5 * (end - start) * t * t / duration, start + (end - start) * t / duration
+    return p[L.THETA0] + 0.5 * (start + end) * duration + end * (t - duration), end
 
 
 @numba.njit(cache=True)
@@ -44,6 +59,8 @@ def cam_acceleration(t, p):
     """Cam angular acceleration ``Theta_ddot`` [rad/s^2] at time ``t`` [s]."""
     if p[L.MOTION_KIND] == 0.0:
         return 0.0
+    if p[L.MOTION_KIND] == 2.0:
+        return (p[L.OMEGA] - p[L.START_OMEGA]) / p[L.RAMP_TIME] if t < p[L.RAMP_TIME] else 0.0
     w = p[L.OMEGA_C]
     return -0.5 * p[L.SWING] * w * w * math.sin(w * t)
 

@@ -58,12 +58,14 @@ FRICTION_LAW = 27   # code of FRICTION_LAWS
 MU = 28             # mu_m [-]
 SMOOTHING = 29      # sigma of tanh friction [s/m]
 # motion
-MOTION_KIND = 30    # 0 constant, 1 oscillating
+MOTION_KIND = 30    # 0 constant, 1 oscillating, 2 ramp
 THETA0 = 31         # Theta0 [rad]
 OMEGA = 32          # signed cam angular speed [rad/s]
 SWING = 33          # Theta_p, peak-to-peak [rad]
 OMEGA_C = 34        # oscillation angular frequency [rad/s]
-SIZE = 35
+START_OMEGA = 35    # signed cam angular speed a ramp starts from [rad/s]
+RAMP_TIME = 36      # duration of a ramp [s]
+SIZE = 37
 
 #: Mode slots passed with the state to the right-hand side (hybrid-system mode).
 MODE_CONTACT = 0     # 1 in contact, 0 free flight
@@ -122,4 +124,6 @@ def pack(system: System, viscous_c: float = 0.0, initial_angle: float | None = N
     p[THETA0] = 0.0 if theta0 is None else theta0
     p[OMEGA] = s.motion.angular_speed
     p[OMEGA_C] = 2.0 * math.pi * s.motion.frequency * s.motion.direction
+    p[START_OMEGA] = 2.0 * math.pi * s.motion.start_speed * s.motion.direction
+    p[RAMP_TIME] = s.motion.ramp_time
     return p
