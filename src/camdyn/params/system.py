@@ -351,7 +351,7 @@ class Motion:
         Duration [s] of a ramp's constant acceleration.
     """
 
-    kind: str = parameter("str", "'constant' or 'oscillating'", "constant")
+    kind: str = parameter("str", "'constant', 'oscillating' or 'ramp'", "constant")
     speed: float = parameter("speed", "cam speed (Hz = rev/s, rpm or rad/s)", 10.0, written="Hz")
     amplitude: float = parameter("rad", "peak-to-peak swing Theta_p of oscillating motion", 0.0)
     frequency: float = parameter("Hz", "frequency of oscillating motion", 0.0)
