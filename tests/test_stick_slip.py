@@ -12,6 +12,7 @@ from camdyn.errors import ParameterError
 from camdyn.integrator import driver
 from camdyn.model import stick_slip
 from camdyn.simulation.mechanisms import simulate_stick_slip
+from camdyn.simulation.sensitivity import integrate_variational
 from camdyn.systems import registry as systems
 
 SYSTEM = systems.STICK_SLIP
@@ -180,3 +181,21 @@ def test_the_dataset_reports_the_switches_with_units():
     sticking = ds.sticking.values == 1
     np.testing.assert_allclose(ds.friction_force.values[sticking], K * ds.x.values[sticking], rtol=1e-12)
     assert np.all(np.abs(ds.friction_force.values) <= MU_S * N * (1 + 1e-12))
+
+
+def test_the_monodromy_matrix_of_the_cycle():
+    # Over one period of the undamped cycle from the middle of a stick: a shift of x
+    # moves the state along the flow (d x_T / d x_0 = 1); the next stick sets x' = v
+    # whatever came before (the x' row is zero); the heat is a quadrature (d Q_T / d Q_0
+    # = 1). So the Floquet multipliers are 1, 1 and 0 (sticking forgets the velocity).
+    c = _closed_form_cycle()
+    period = c["stick"] + c["slip"]
+    p = stick_slip.pack(M, K, V, MU_S, MU_K, gravity=G)
+    start = [0.5 * (c["x_a"] + c["x_b"]), V, 0.0]
+    result = integrate_variational(SYSTEM, p, start, 0.0, period, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(result.state[:2], start[:2], rtol=0, atol=1e-10)   # back on the cycle
+    phi = result.matrix
+    assert phi[0, 0] == pytest.approx(1.0, abs=1e-6)
+    np.testing.assert_allclose(phi[1], 0.0, atol=1e-9)
+    assert phi[2, 2] == pytest.approx(1.0, abs=1e-9)
+    np.testing.assert_allclose(np.sort(np.abs(np.linalg.eigvals(phi))), [0.0, 1.0, 1.0], atol=1e-6)
