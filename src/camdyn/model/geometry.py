@@ -38,6 +38,9 @@ def cam_angle(t, p):
         return p[L.THETA0] + p[L.OMEGA] * t, p[L.OMEGA]
     if p[L.MOTION_KIND] == 2.0:
         return _ramp_angle(t, p)
+    if p[L.MOTION_KIND] == 3.0:
+        angle, speed, acceleration = _table_angle(t, p)
+        return angle, speed
     half = 0.5 * p[L.SWING]
     w = p[L.OMEGA_C]
     return p[L.THETA0] + half * math.sin(w * t), half * w * math.cos(w * t)
@@ -55,12 +58,34 @@ def _ramp_angle(t, p):
 
 
 @numba.njit(cache=True)
+def _table_angle(t, p):
+    """Cam angle [rad], speed [rad/s] and acceleration [rad/s^2] of a tabulated motion:
+    ``Theta(t) = g(t) + W t`` with ``W`` the mean speed and ``g`` a periodic cubic spline
+    of period ``T`` on uniform knots; the coefficients of its power form in each interval,
+    ``g = a0 + a1 s + a2 s^2 + a3 s^3`` with ``s`` the time from the interval's start,
+    follow one another from slot ``p[TABLE_START]`` of ``p``."""
+    period = p[L.TABLE_PERIOD]
+    intervals = int(p[L.TABLE_INTERVALS])
+    step = period / intervals
+    tau = t - period * math.floor(t / period)
+    i = min(int(tau / step), intervals - 1)
+    s = tau - i * step
+    c = int(p[L.TABLE_START]) + 4 * i
+    a0, a1, a2, a3 = p[c], p[c + 1], p[c + 2], p[c + 3]
+    drift = p[L.TABLE_DRIFT]
+    return (a0 + s * (a1 + s * (a2 + s * a3)) + drift * t, a1 + s * (2.0 * a2 + 3.0 * a3 * s) + drift,
+            2.0 * a2 + 6.0 * a3 * s)
+
+
+@numba.njit(cache=True)
 def cam_acceleration(t, p):
     """Cam angular acceleration ``Theta_ddot`` [rad/s^2] at time ``t`` [s]."""
     if p[L.MOTION_KIND] == 0.0:
         return 0.0
     if p[L.MOTION_KIND] == 2.0:
         return (p[L.OMEGA] - p[L.START_OMEGA]) / p[L.RAMP_TIME] if t < p[L.RAMP_TIME] else 0.0
+    if p[L.MOTION_KIND] == 3.0:
+        return _table_angle(t, p)[2]
     w = p[L.OMEGA_C]
     return -0.5 * p[L.SWING] * w * w * math.sin(w * t)
 

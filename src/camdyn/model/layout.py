@@ -58,14 +58,18 @@ FRICTION_LAW = 27   # code of FRICTION_LAWS
 MU = 28             # mu_m [-]
 SMOOTHING = 29      # sigma of tanh friction [s/m]
 # motion
-MOTION_KIND = 30    # 0 constant, 1 oscillating, 2 ramp
+MOTION_KIND = 30    # 0 constant, 1 oscillating, 2 ramp, 3 tabulated (packed by simulation.mechanisms)
 THETA0 = 31         # Theta0 [rad]
 OMEGA = 32          # signed cam angular speed [rad/s]
 SWING = 33          # Theta_p, peak-to-peak [rad]
 OMEGA_C = 34        # oscillation angular frequency [rad/s]
 START_OMEGA = 35    # signed cam angular speed a ramp starts from [rad/s]
 RAMP_TIME = 36      # duration of a ramp [s]
-SIZE = 37
+TABLE_START = 37    # slot of the first spline coefficient of a tabulated motion (kind 3) [-]
+TABLE_INTERVALS = 38  # number of spline intervals over the table's period [-]
+TABLE_PERIOD = 39   # period of the tabulated motion [s]
+TABLE_DRIFT = 40    # mean cam speed of the tabulated motion, (Theta(T) - Theta(0)) / T [rad/s]
+SIZE = 41
 
 #: Mode slots passed with the state to the right-hand side (hybrid-system mode).
 MODE_CONTACT = 0     # 1 in contact, 0 free flight

@@ -1,7 +1,8 @@
 """Mechanisms with more degrees of freedom than the cam-follower with a prescribed cam:
 the cam as a rigid body driven by a torque (:func:`simulate_driven_cam`) and the
 stick-slip oscillator (:func:`simulate_stick_slip`), each returned as an xarray Dataset
-with units."""
+with units; and the cam-follower under a cam angle tabulated over one period
+(:func:`simulate_tabulated`)."""
 
 from __future__ import annotations
 
@@ -20,7 +21,8 @@ from camdyn.simulation import limits
 from camdyn.simulation.runner import METHODS, default_max_step, prepare
 from camdyn.systems import registry as systems
 
-__all__ = ["CamDrive", "simulate_driven_cam", "simulate_stick_slip", "speed_fluctuation"]
+__all__ = ["CamDrive", "simulate_driven_cam", "simulate_stick_slip", "speed_fluctuation", "tabulated_motion",
+           "simulate_tabulated"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -110,8 +112,18 @@ DRIVEN_STATE = (
 
 
 def _run(system_id, p, y0, duration, sample_rate, period, rtol, atol, method, max_step):
-    """The shared checks and the compiled call; returns the output times, states, modes,
-    events and counters, or raises ``SimulationError``."""
+    """:func:`_run_counters` with the counters as the Dataset's attributes."""
+    t_out, y, modes, events, counters, elapsed = _run_counters(system_id, p, y0, duration, sample_rate, period,
+                                                               rtol, atol, method, max_step)
+    attrs = {"rtol": rtol, "atol": atol, "method": method, "elapsed_s": elapsed,
+             "accepted_steps": int(counters[driver.COUNT_ACCEPTED]),
+             "rejected_steps": int(counters[driver.COUNT_REJECTED]), "events": int(events.shape[0])}
+    return t_out, y, modes, events, attrs
+
+
+def _run_counters(system_id, p, y0, duration, sample_rate, period, rtol, atol, method, max_step):
+    """The shared checks and the compiled call; returns the output times [s], states,
+    modes, events, counters and wall time [s], or raises ``SimulationError``."""
     if method not in METHODS:
         raise ParameterError(f"method must be one of {sorted(METHODS)}, got {method!r}")
     limits.check_tolerances(rtol, atol)
@@ -134,10 +146,7 @@ def _run(system_id, p, y0, duration, sample_rate, period, rtol, atol, method, ma
         raise KeyboardInterrupt
     if status != driver.STATUS_OK:
         raise SimulationError(f"simulation {driver.STATUS_MESSAGES[status]}")
-    attrs = {"rtol": rtol, "atol": atol, "method": method, "elapsed_s": elapsed,
-             "accepted_steps": int(counters[driver.COUNT_ACCEPTED]),
-             "rejected_steps": int(counters[driver.COUNT_REJECTED]), "events": int(events.shape[0])}
-    return t_out, y, modes, events, attrs
+    return t_out, y, modes, events, counters, elapsed
 
 
 def speed_fluctuation(cam_speed: np.ndarray) -> float:
@@ -279,3 +288,112 @@ def simulate_stick_slip(mass: float, stiffness: float, belt_speed: float, static
     attrs.update(mass=mass, stiffness=stiffness, belt_speed=belt_speed, static_friction=static_friction,
                  kinetic_friction=kinetic_friction, damping=damping, gravity=gravity)
     return xr.Dataset(data, coords={"time": ("time", t, {"units": "s", "long_name": "time"})}, attrs=attrs)
+
+
+def tabulated_motion(times, angles) -> tuple[float, float, np.ndarray]:
+    """The periodic cubic spline of a cam angle tabulated over one period.
+
+    Parameters
+    ----------
+    times : array_like
+        Sample times [s] at uniform steps from 0 to the period ``T`` (both included).
+    angles : array_like
+        Cam angle ``Theta`` [rad] at each time; ``Theta(T) - Theta(0)`` is the angle turned
+        per period (0 for an oscillation, ``2 pi`` for one revolution).
+
+    Returns
+    -------
+    period : float
+        ``T`` [s].
+    mean_speed : float
+        ``W = (Theta(T) - Theta(0)) / T`` [rad/s].
+    coefficients : ndarray (4 n,)
+        ``(a0, a1, a2, a3)`` of each of the ``n`` intervals [rad, rad/s, rad/s^2, rad/s^3]:
+        ``Theta = a0 + a1 s + a2 s^2 + a3 s^3 + W t`` at ``s`` [s] into the interval (the
+        periodic part interpolated with a periodic cubic spline, ``scipy.interpolate.
+        CubicSpline`` with ``bc_type="periodic"``: continuous to the second derivative
+        across the period too).
+
+    Raises
+    ------
+    ParameterError
+        If the table is not two finite 1-D arrays of equal length (at least 4 samples), or
+        its times do not start at 0 and run up at uniform steps.
+    """
+    from scipy.interpolate import CubicSpline
+
+    t = np.asarray(times, dtype=float)
+    theta = np.asarray(angles, dtype=float)
+    if t.ndim != 1 or theta.shape != t.shape or t.size < 4:
+        raise ParameterError("a cam-angle table needs two 1-D arrays of equal length, at least 4 samples "
+                             f"(times {t.shape}, angles {theta.shape})")
+    if not (np.isfinite(t).all() and np.isfinite(theta).all()):
+        raise ParameterError("a cam-angle table must hold finite numbers only")
+    step = np.diff(t)
+    if t[0] != 0.0 or not (step > 0).all() or np.ptp(step) > 1e-9 * step.mean():
+        raise ParameterError("the table's times must start at 0 s and rise at uniform steps over one period")
+    period = float(t[-1])
+    mean_speed = float((theta[-1] - theta[0]) / period)
+    periodic = theta - mean_speed * t
+    periodic[-1] = periodic[0]   # closes exactly (rounding of the drift aside)
+    c = CubicSpline(t, periodic, bc_type="periodic").c   # c[k, i]: coefficient of s^(3-k)
+    return period, mean_speed, c[::-1].T.ravel().copy()
+
+
+def simulate_tabulated(system: System, times, angles, periods: float = 5.0, duration: float | None = None,
+                       sample_rate: float = 20e3, rtol: float = 1e-8, atol: float = 1e-10, method: str = "auto",
+                       variables=None) -> xr.Dataset:
+    """Simulate the cam-follower with the cam angle prescribed by a table over one period,
+    repeated (:func:`tabulated_motion`).
+
+    Parameters
+    ----------
+    system : System
+        The cam-follower; its motion is replaced by the table, which starts at
+        ``Theta(0) = angles[0]`` with the follower at its static equilibrium there (with
+        the friction of the table's starting speed, as :func:`camdyn.simulate` takes it).
+        The result's ``speed_hz`` attribute is that starting speed.
+    times, angles : array_like
+        The table (:func:`tabulated_motion`): times [s], cam angles [rad].
+    periods : float
+        Length of the run in table periods [-]; ignored with ``duration``.
+    duration : float, optional
+        Length of the run [s].
+    sample_rate : float
+        Output sampling rate [Hz].
+    rtol, atol : float
+        Local error tolerances: relative [-] and absolute [rad, rad/s].
+    method : {"auto", "dop853", "explicit", "rosenbrock"}
+        Stepper choice.
+    variables : sequence of str, optional
+        As :func:`camdyn.simulate`.
+
+    Returns
+    -------
+    xarray.Dataset
+        As :func:`camdyn.simulate` returns, the cam angle and speed following the table.
+    """
+    from camdyn.model import layout as L
+    from camdyn.simulation.runner import run_dataset
+
+    period, mean_speed, coefficients = tabulated_motion(times, angles)
+    limits.check_system(system)
+    if duration is None:
+        duration = limits.check_number("periods", periods) * period
+    # the static equilibrium the run starts from takes the friction's direction (and, for
+    # tanh friction, its size) from the cam speed at t = 0: the table's, as constant motion
+    start_speed = float(coefficients[1] + mean_speed)
+    s = system.with_values(**{"motion.kind": "constant", "motion.initial_angle": float(np.asarray(angles)[0]),
+                              "motion.speed": abs(start_speed) / (2.0 * math.pi),
+                              "motion.direction": 1 if start_speed >= 0.0 else -1})
+    prep = prepare(s)
+    p = np.r_[prep.p, coefficients]
+    p[L.MOTION_KIND] = 3.0
+    p[L.TABLE_START] = L.SIZE
+    p[L.TABLE_INTERVALS] = coefficients.size // 4
+    p[L.TABLE_PERIOD] = period
+    p[L.TABLE_DRIFT] = mean_speed
+    prep.p = p
+    t, y, modes, events, counters, elapsed = _run_counters(systems.CAM_FOLLOWER, p, prep.y0, duration, sample_rate,
+                                                           period, rtol, atol, method, None)
+    return run_dataset(s, prep, t, y, modes, events, counters, elapsed, rtol, atol, method, variables)

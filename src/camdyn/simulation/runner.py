@@ -26,7 +26,7 @@ from camdyn.params.units import parse_speed
 from camdyn.simulation import limits
 from camdyn.systems import registry as systems
 
-__all__ = ["simulate", "prepare", "impact_table", "Prepared", "penetration_resolution"]
+__all__ = ["simulate", "prepare", "impact_table", "Prepared", "penetration_resolution", "run_dataset"]
 
 METHODS = {"auto": driver.METHOD_AUTO, "explicit": driver.METHOD_EXPLICIT,
            "dop853": driver.METHOD_DOP853, "rosenbrock": driver.METHOD_ROSENBROCK}
@@ -277,6 +277,16 @@ def check_variables(variables) -> frozenset:
     if not names:
         raise ParameterError("variables is empty: ask for at least one, e.g. ['alpha']")
     return frozenset(names)
+
+
+def run_dataset(system: System, prep: Prepared, t, y, modes, events, counters, elapsed: float, rtol: float,
+                atol: float, method: str, variables=None) -> xr.Dataset:
+    """The Dataset :func:`simulate` returns, for a cam-follower run made elsewhere (one that
+    packs its own parameter vector ``prep.p``): output times ``t`` [s], states ``y``,
+    ``modes``, ``events`` and ``counters`` of :func:`camdyn.integrator.driver.integrate`,
+    its wall time ``elapsed`` [s], and the tolerances and method it ran with."""
+    return _dataset(system, prep, t, y, modes, events, counters, elapsed, rtol, atol, method,
+                    check_variables(variables))
 
 
 def _dataset(system, prep, t, y, modes, events, counters, elapsed, rtol, atol, method, wanted) -> xr.Dataset:
