@@ -116,7 +116,7 @@ def test_an_independent_scipy_solution_agrees(friction_rig):
 def test_the_speed_controller_holds_the_mean_speed(friction_rig):
     # PI control: z' = omega_ref - Theta', so over a periodic steady state the mean speed
     # equals the set point exactly (z returns to its value); the run's last revolutions
-    # are close to periodic, which bounds the check
+    # are close to periodic (the slowest closed-loop mode has decayed), which bounds the check
     s = friction_rig.with_values(**{"motion.speed": 11.55})
     target = 1.05 * s.motion.angular_speed
     drive = CamDrive(shaft_inertia=1e-4, kind="controller", torque=0.0, proportional=0.02, integral=0.5,
@@ -125,7 +125,7 @@ def test_the_speed_controller_holds_the_mean_speed(friction_rig):
     last = ds.time.values >= 1.5 - 2 * 2 * math.pi / target
     cycles = ds.cam_angle.values[last]
     mean = (cycles[-1] - cycles[0]) / (ds.time.values[last][-1] - ds.time.values[last][0])
-    assert abs(mean / target - 1) < 1e-3, mean / target
+    assert abs(mean / target - 1) < 1e-5, mean / target   # measured 1.3e-7
 
 
 @pytest.mark.parametrize("kwargs, words", [
