@@ -1,0 +1,132 @@
+"""Periodic orbits by shooting, their Floquet multipliers and their continuation, against
+closed forms: the forced linear oscillator's steady state (amplitude and phase) and
+multipliers exp(lambda T); the rigid-impact oscillator's period-1 one-impact orbit, solved
+here from its free motion between impacts written out, its monodromy with the impact's
+saltation matrix, its period doubling (a multiplier at -1) and its grazing (the
+non-impacting orbit's amplitude reaching the wall)."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+from scipy.optimize import brentq, fsolve
+
+from camdyn.continuation import find_orbit, model_problem
+from camdyn.continuation.branches import continue_orbits
+from camdyn.errors import ParameterError, SimulationError
+from camdyn.systems import registry as systems
+
+W_NATURAL, ZETA, FORCE, RESTITUTION = 1.0, 0.05, 1.0, 0.8
+
+
+def test_linear_oscillator_orbit_is_the_steady_state_and_its_multipliers_exp_lambda_t():
+    w, zeta, force, forcing = 2.0, 0.05, 0.7, 1.3
+    problem = model_problem(systems.OSCILLATOR, [w, zeta, force, forcing, 0.0], [0.0, 0.0, 0.0])
+    orbit = find_orbit(problem, start=[0.0, 0.0])
+    # x = X cos(W t - phi), X = A / sqrt((w^2 - W^2)^2 + (2 zeta w W)^2), tan phi = 2 zeta w W / (w^2 - W^2)
+    amplitude = force / math.hypot(w * w - forcing * forcing, 2 * zeta * w * forcing)
+    phase = math.atan2(2 * zeta * w * forcing, w * w - forcing * forcing)
+    np.testing.assert_allclose(orbit.state, [amplitude * math.cos(phase), amplitude * forcing * math.sin(phase)],
+                               rtol=0, atol=1e-9)
+    period = 2 * math.pi / forcing
+    assert orbit.period == pytest.approx(period, rel=1e-15)
+    # lambda = -zeta w +- i w sqrt(1 - zeta^2)
+    lam = complex(-zeta * w, w * math.sqrt(1 - zeta * zeta))
+    expected = np.exp(np.array([lam, lam.conjugate()]) * period)
+    assert np.max(np.abs(np.sort_complex(orbit.multipliers) - np.sort_complex(expected))) < 1e-9
+    assert orbit.stable and orbit.impacts_per_period == 0
+
+
+def _free(forcing, t_impact, x0, v0, s):
+    """The rigid-impact oscillator's free motion s [s] after leaving (x0, v0) at t_impact:
+    steady state plus damped homogeneous solution."""
+    w, z = W_NATURAL, ZETA
+    amplitude = FORCE / math.hypot(w * w - forcing * forcing, 2 * z * w * forcing)
+    phase = math.atan2(2 * z * w * forcing, w * w - forcing * forcing)
+    xp = lambda t: amplitude * math.cos(forcing * t - phase)
+    vp = lambda t: -amplitude * forcing * math.sin(forcing * t - phase)
+    wd = w * math.sqrt(1 - z * z)
+    c1 = x0 - xp(t_impact)
+    c2 = (v0 - vp(t_impact) + z * w * c1) / wd
+    decay = math.exp(-z * w * s)
+    cos, sin = math.cos(wd * s), math.sin(wd * s)
+    x = xp(t_impact + s) + decay * (c1 * cos + c2 * sin)
+    v = vp(t_impact + s) + decay * (-z * w * (c1 * cos + c2 * sin) + wd * (c2 * cos - c1 * sin))
+    return x, v
+
+
+def _impact_orbit(forcing, sigma, guess):
+    """Impact phase t_i [s] and rebound velocity v [m/s] of the period-1 one-impact orbit:
+    leave the wall with v at t_i, return one period later with -v / r."""
+    period = 2 * math.pi / forcing
+
+    def residual(u):
+        x, v = _free(forcing, u[0], sigma, u[1], period)
+        return [x - sigma, v + u[1] / RESTITUTION]
+    solution = fsolve(residual, guess, xtol=1e-14)
+    assert np.max(np.abs(residual(solution))) < 1e-12 and solution[1] < 0
+    return solution
+
+
+def _closed_form_multipliers(forcing, sigma, t_impact, v):
+    """Eigenvalues of the monodromy: saltation at the impact times the free flow over T."""
+    a = np.array([[0.0, 1.0], [-W_NATURAL ** 2, -2 * ZETA * W_NATURAL]])
+    v_minus = -v / RESTITUTION
+    accel = FORCE * math.cos(forcing * t_impact) - W_NATURAL ** 2 * sigma
+    f_minus = np.array([v_minus, accel - 2 * ZETA * W_NATURAL * v_minus])
+    f_plus = np.array([v, accel - 2 * ZETA * W_NATURAL * v])
+    reset, normal = np.diag([1.0, -RESTITUTION]), np.array([-1.0, 0.0])   # g = sigma - x
+    saltation = reset + np.outer(f_plus - reset @ f_minus, normal) / (normal @ f_minus)
+    values = np.linalg.eigvals(saltation @ expm(a * 2 * math.pi / forcing))
+    return values[np.argsort(-np.abs(values))]
+
+
+def _rigid(forcing, sigma=0.0):
+    return model_problem(systems.RIGID_IMPACT, [W_NATURAL, ZETA, FORCE, forcing, sigma, RESTITUTION],
+                         [sigma - 1.0, 0.0, 0.0])
+
+
+def test_rigid_impact_period_one_orbit_and_its_multipliers_match_the_closed_form():
+    forcing, sigma = 2.5, 0.0
+    t_impact, v = _impact_orbit(forcing, sigma, [1.1, -0.5])
+    period = 2 * math.pi / forcing
+    t_impact %= period
+    # the state at t = 0 (= T): free flight from the impact over the rest of the period
+    x0, v0 = _free(forcing, t_impact, sigma, v, period - t_impact)
+    flight = [_free(forcing, t_impact, sigma, v, s)[0] for s in np.linspace(0.01, period - 0.01, 200)]
+    assert max(flight) < sigma                                  # a true orbit: one impact, in flight otherwise
+    orbit = find_orbit(_rigid(forcing))                         # from a 50-period transient
+    np.testing.assert_allclose(orbit.state, [x0, v0], rtol=0, atol=1e-9)
+    expected = _closed_form_multipliers(forcing, sigma, t_impact, v)
+    np.testing.assert_allclose(orbit.multipliers, expected, rtol=0, atol=1e-9)
+    assert orbit.stable and orbit.impacts_per_period == 1 and orbit.iterations <= 5
+
+
+def test_rigid_impact_branch_locates_the_period_doubling_of_the_closed_form():
+    def doubling(forcing):                                      # det(M + I): a multiplier at -1
+        t_impact, v = _impact_orbit(forcing, 0.0, [1.1, -0.3])
+        return float(np.real(np.prod(_closed_form_multipliers(forcing, 0.0, t_impact, v) + 1.0)))
+    expected = brentq(doubling, 2.6, 2.7, xtol=1e-14)
+    problem = _rigid(2.3)
+    branch = continue_orbits(problem, find_orbit(problem), 3.0, step=0.02)
+    kinds = [b.kind for b in branch.bifurcations]
+    assert kinds == ["period-doubling"], kinds
+    found = branch.bifurcations[0]
+    assert abs(found.parameter - expected) < 1e-6, (found.parameter, expected)
+    assert np.min(np.abs(found.orbit.multipliers + 1.0)) < 1e-6
+    stable = [o.stable for o in branch.orbits]
+    assert all(o.parameter < expected for o, s in zip(branch.orbits, stable) if s)
+    assert all(o.parameter > expected for o, s in zip(branch.orbits, stable) if not s)
+    assert branch.orbits[-1].parameter == pytest.approx(3.0, abs=1e-12)
+
+
+def test_shooting_refuses_bad_input_and_reports_no_convergence():
+    with pytest.raises(ParameterError, match="positive integer"):
+        find_orbit(_rigid(2.5), periods=0)
+    with pytest.raises(ParameterError, match="finite"):
+        find_orbit(_rigid(2.5), start=[math.nan, 0.0])
+    with pytest.raises(ParameterError, match="forcing frequency"):
+        model_problem(systems.RIGID_IMPACT, [1.0, 0.05, 1.0, 0.0, 0.0, 0.8], [-1.0, 0.0, 0.0])
+    with pytest.raises(SimulationError, match="did not converge"):
+        find_orbit(_rigid(2.5), start=[-0.5, 0.3], max_iterations=1)
