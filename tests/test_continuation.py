@@ -130,3 +130,18 @@ def test_shooting_refuses_bad_input_and_reports_no_convergence():
         model_problem(systems.RIGID_IMPACT, [1.0, 0.05, 1.0, 0.0, 0.0, 0.8], [-1.0, 0.0, 0.0])
     with pytest.raises(SimulationError, match="did not converge"):
         find_orbit(_rigid(2.5), start=[-0.5, 0.3], max_iterations=1)
+
+
+def test_non_impacting_branch_ends_at_the_grazing_of_the_closed_form():
+    sigma = 1.5
+    # the orbit touches the wall where the linear steady state's amplitude reaches sigma
+    amplitude = lambda forcing: FORCE / math.hypot(W_NATURAL ** 2 - forcing ** 2, 2 * ZETA * W_NATURAL * forcing)
+    expected = brentq(lambda forcing: amplitude(forcing) - sigma, 0.5, 0.99, xtol=1e-14)
+    problem = _rigid(0.5, sigma)
+    start = find_orbit(problem, transient=300)
+    assert start.impacts_per_period == 0 and start.guard_minimum == pytest.approx(sigma - amplitude(0.5), abs=1e-6)
+    branch = continue_orbits(problem, start, 0.8, step=0.02)
+    assert [b.kind for b in branch.bifurcations] == ["grazing"]
+    assert abs(branch.bifurcations[0].parameter - expected) < 1e-6, (branch.bifurcations[0].parameter, expected)
+    assert all(o.impacts_per_period == 0 and o.stable for o in branch.orbits)
+    assert "step fell below" in branch.stopped

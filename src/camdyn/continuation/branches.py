@@ -130,6 +130,8 @@ class _Continuation:
             full = np.vstack([jac, direction])
             rhs = np.concatenate([residual, [direction @ (z - anchor) - arclength]])
             step = np.linalg.solve(full, -rhs)
+            if not np.linalg.norm(step) < 0.5:                       # diverging: half the scale in one step
+                break
             z = z + step
             if np.linalg.norm(step) < self.tolerance * (1.0 + np.linalg.norm(z)) and \
                     np.linalg.norm(residual) < math.sqrt(self.tolerance):
@@ -174,7 +176,7 @@ def _locate(job: _Continuation, a: _Point, b: _Point, kind: str, max_iterations:
             s = hi[0] - f_hi * (hi[0] - lo[0]) / (f_hi - f_lo)
         try:
             point = job.correct(a.z + s * a.tangent, a.tangent, a.z, s)
-        except SimulationError:
+        except (SimulationError, ParameterError):
             return None
         f = value(point)
         best = point
@@ -212,6 +214,23 @@ def _detect(job: _Continuation, a: _Point, b: _Point) -> list[Bifurcation]:
     return sorted(found, key=lambda item: float(a.tangent @ (np.r_[item.orbit.state, item.parameter] / job.scales)))
 
 
+def _grazing_end(orbits: list[Orbit]) -> list[Bifurcation]:
+    """A branch that ends because its orbit touches the contact guard (the smallest guard
+    value has fallen to a thousandth of its largest along the branch): a grazing
+    bifurcation at the parameter where the secant through the last two points' smallest
+    guard values reaches zero. Past it the orbit gains an impact whose monodromy grows as
+    the inverse of the impact velocity (Di Bernardo et al. 2008, sec. 8.2), so the branch
+    cannot be continued through it."""
+    if len(orbits) < 2:
+        return []
+    a, b = orbits[-2], orbits[-1]
+    largest = max(abs(o.guard_minimum) for o in orbits)
+    if not (0 <= b.guard_minimum < 1e-3 * largest and a.guard_minimum > b.guard_minimum):
+        return []
+    slope = (b.guard_minimum - a.guard_minimum) / (b.parameter - a.parameter)
+    return [Bifurcation("grazing", b.parameter - b.guard_minimum / slope, b)]
+
+
 def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0.01, min_step: float = 1e-6,
                     max_step: float = 0.1, max_points: int = 500, tolerance: float = 1e-10,
                     max_corrections: int = 8, progress: Callable[[Orbit], None] | None = None) -> Branch:
@@ -229,7 +248,8 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         last point lands on it) or comes back past its start (after a fold).
     step, min_step, max_step : float
         First, smallest and largest arclength step, in scaled units (the parameter scaled
-        by its starting magnitude, each state component by its own).
+        by its starting magnitude, each state component by its own, but by no less than a
+        tenth of the largest).
     max_points : int
         Most points on the branch.
     tolerance : float
@@ -251,7 +271,7 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         raise ParameterError(f"stop must differ from the start {start.parameter}")
     direction = 1.0 if stop > start.parameter else -1.0
     x0 = np.abs(start.state)
-    scales = np.r_[np.maximum(x0, max(1e-3 * x0.max(), 1e-12)), max(abs(start.parameter), 1e-12)]
+    scales = np.r_[np.maximum(x0, max(0.1 * x0.max(), 1e-12)), max(abs(start.parameter), 1e-12)]
     job = _Continuation(problem, start.periods, scales, tolerance, max_corrections)
     z0 = np.r_[start.state, start.parameter] / scales
     _, jac = job.system(z0)
@@ -269,7 +289,7 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         if (target - edge / scales[-1]) * point.tangent[-1] > 0 and abs(point.tangent[-1]) > 1e-3:
             ds = (edge / scales[-1] - point.z[-1]) / point.tangent[-1]
             last_step = True
-        try:
+        try:                                               # a failed run or a parameter out of bounds
             if last_step:                                  # land on the edge: the parameter fixed there
                 axis = np.zeros(point.z.size)
                 axis[-1] = 1.0
@@ -277,9 +297,10 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
                 new.tangent = point.tangent if new.tangent @ point.tangent >= 0 else -new.tangent
             else:
                 new = job.correct(point.z + ds * point.tangent, point.tangent, point.z, ds)
-        except SimulationError:
+        except (SimulationError, ParameterError):
             ds *= 0.5
             if ds < min_step:
+                branch.bifurcations.extend(_grazing_end(branch.orbits))
                 return Branch(branch.orbits, branch.bifurcations,
                               f"the step fell below {min_step:g} at {problem.name} = {point.orbit.parameter:.9g}")
             continue

@@ -152,14 +152,21 @@ def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samp
 
 
 def _guard_minimum(system_id: int, p: np.ndarray, times: np.ndarray, states: np.ndarray) -> float:
-    """Smallest value of guard 0 over the sampled states."""
+    """Smallest value of guard 0 over the sampled states, refined by the parabola through
+    the smallest sample and its neighbours (error of order the sample spacing cubed)."""
     m = systems.guard_count(system_id)
     values, rates = np.empty(m), np.empty(m)
-    smallest = math.inf
-    for t, y in zip(times, states):
+    sampled = np.empty(times.size)
+    for i, (t, y) in enumerate(zip(times, states)):
         systems.guards(system_id, float(t), y, y, False, p, values, rates)
-        smallest = min(smallest, values[0])
-    return float(smallest)
+        sampled[i] = values[0]
+    i = int(np.argmin(sampled))
+    if 0 < i < sampled.size - 1:
+        left, middle, right = sampled[i - 1], sampled[i], sampled[i + 1]
+        curvature = left - 2.0 * middle + right
+        if curvature > 0:                                          # vertex of the parabola
+            return float(middle - (right - left) ** 2 / (8.0 * curvature))
+    return float(sampled[i])
 
 
 def transient_state(problem: Problem, periods: int = 50, value: float | None = None) -> np.ndarray:
