@@ -145,3 +145,46 @@ def test_non_impacting_branch_ends_at_the_grazing_of_the_closed_form():
     assert abs(branch.bifurcations[0].parameter - expected) < 1e-6, (branch.bifurcations[0].parameter, expected)
     assert all(o.impacts_per_period == 0 and o.stable for o in branch.orbits)
     assert "step fell below" in branch.stopped
+
+
+@pytest.fixture(scope="module")
+def chapter4():
+    """The chapter 4 rig at e/a = 0.05 in sustained contact, its problem in the cam speed
+    and its period-1 orbit (Newton from a 1-revolution transient)."""
+    import camdyn
+    from camdyn.continuation import system_problem
+    system = camdyn.load_system("sundar2014-friction").with_values(**{"cam.runout": 0.05 * 17.5e-3})
+    problem = system_problem(system, "motion.speed")
+    return system, problem, find_orbit(problem, transient=1)
+
+
+def test_cam_follower_orbit_has_the_harmonics_of_a_long_simulation(chapter4):
+    import camdyn
+    system, problem, orbit = chapter4
+    assert orbit.iterations >= 1 and orbit.impacts_per_period == 0 and orbit.stable
+    speed = problem.value
+    rate = 256 * speed                                         # a whole number of samples per revolution
+    tight = {"rtol": 1e-10, "atol": 1e-12, "sample_rate": rate, "variables": ["alpha", "alpha_ddot"]}
+    one = camdyn.simulate(system, revolutions=1, initial_state=orbit.state, **tight)
+    long = camdyn.simulate(system, revolutions=12, **tight)    # from rest; the transient decays by 5e-5 a revolution
+    for name in ("alpha", "alpha_ddot"):
+        ours = np.fft.rfft(one[name].values[:256])[:6] / 256
+        theirs = np.fft.rfft(long[name].values[-257:-1])[:6] / 256
+        scale = np.abs(theirs[1:]).max()
+        assert np.abs(ours - theirs).max() < 1e-6 * scale, (name, np.abs(ours - theirs).max() / scale)
+
+
+def test_cam_follower_floquet_exponents_are_the_linear_models_eigenvalues(chapter4):
+    from camdyn.analysis.linear import linearize
+    system, problem, orbit = chapter4
+    linear = linearize(system)
+    eigenvalues = np.roots([linear.inertia, linear.damping, linear.stiffness])
+    period = 1.0 / problem.value
+    upper = eigenvalues[np.argmax(eigenvalues.imag)]
+    mu = orbit.multipliers[np.argmax(orbit.multipliers.imag)]
+    # ln(mu) / T is an eigenvalue up to 2 pi i k / T: take the turn count nearest the linear model's
+    turns = round((upper.imag * period - np.angle(mu)) / (2 * math.pi))
+    exponent = complex(math.log(abs(mu)), np.angle(mu) + 2 * math.pi * turns) / period
+    assert abs(exponent.real - upper.real) < 0.01 * abs(upper.real), (exponent, upper)
+    assert abs(exponent.imag - upper.imag) < 0.01 * abs(upper.imag), (exponent, upper)
+    assert abs(orbit.multipliers[0]) == pytest.approx(abs(orbit.multipliers[1]), rel=1e-9)   # a complex pair
