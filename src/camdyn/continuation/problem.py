@@ -23,7 +23,7 @@ from camdyn.simulation import limits
 from camdyn.simulation.runner import prepare
 from camdyn.systems import registry as systems
 
-__all__ = ["Problem", "model_problem", "system_problem", "FORCING_INDEX"]
+__all__ = ["Problem", "model_problem", "system_problem", "parameter_unit", "FORCING_INDEX"]
 
 #: Index of the forcing frequency W [rad/s] in each test model's parameter vector.
 FORCING_INDEX = {systems.OSCILLATOR: 3, systems.RIGID_IMPACT: 3, systems.COUPLED_OSCILLATORS: 4}
@@ -128,6 +128,18 @@ def model_problem(system_id: int, p, initial_state, index: int | None = None, t_
                    impacts=system_id != systems.OSCILLATOR)
 
 
+def parameter_unit(system: System, key: str) -> str:
+    """The SI unit of the continuous parameter ``key`` of ``system`` (``Hz`` for a cam
+    speed); a :class:`ParameterError` for an unknown or non-numeric key."""
+    known = parameter_index(type(system))
+    if key not in known:
+        raise ParameterError(f"unknown parameter {key!r}; `camdyn presets keys` lists them")
+    unit = known[key].unit
+    if unit in ("str", "bool", "int", "law"):
+        raise ParameterError(f"{key} is not a continuous parameter (its kind is {unit})")
+    return "Hz" if unit == "speed" else unit
+
+
 def system_problem(system: System, key: str = "motion.speed", initial_state=None, rtol: float = 1e-10,
                    atol: float = 1e-12) -> Problem:
     """The cam-follower's periodic problem over one cam period ``1 / speed`` [s], the
@@ -140,14 +152,8 @@ def system_problem(system: System, key: str = "motion.speed", initial_state=None
     """
     limits.check_system(system)
     _check_tolerances(rtol, atol)
-    known = parameter_index(type(system))
-    if key not in known:
-        raise ParameterError(f"unknown parameter {key!r}; `camdyn presets keys` lists them")
-    info = known[key]
-    if info.unit in ("str", "bool", "int", "law"):
-        raise ParameterError(f"{key} is not a continuous parameter (its kind is {info.unit})")
-    unit = "Hz" if info.unit == "speed" else info.unit
-    value = info.getter(system)
+    unit = parameter_unit(system, key)
+    value = parameter_index(type(system))[key].getter(system)
     if value is None or not math.isfinite(float(value)):
         raise ParameterError(f"{key} has no finite value to start from")
     value = float(value)
