@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from camdyn.continuation.orbits import SAMPLES_PER_PERIOD, Orbit, flow, make_orbit
+from camdyn.continuation.orbits import SAMPLES_PER_PERIOD, Orbit, flow, make_orbit, shoot
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError, SimulationError
 
@@ -86,6 +86,7 @@ class _Point:
     tangent: np.ndarray    # unit tangent, scaled
     orbit: Orbit
     iterations: int
+    jacobian: np.ndarray   # scaled [M - I, G_lambda]
 
 
 class _Continuation:
@@ -103,44 +104,47 @@ class _Continuation:
         u = z * self.scales
         return u[:-1], float(u[-1])
 
-    def system(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Scaled residual and Jacobian ``[M - I, G_lambda]`` at scaled ``z``."""
+    def residual(self, z: np.ndarray) -> np.ndarray:
+        """Scaled residual ``G / s_x`` at scaled ``z``, by the plain model."""
         x, value = self.unscale(z)
-        run = flow(self.problem, x, value, self.periods)
+        return (shoot(self.problem, x, value, self.periods) - x) / self.scales[:-1]
+
+    def point(self, z: np.ndarray, previous: np.ndarray, iterations: int) -> _Point:
+        """The converged point at ``z``: its orbit (monodromy and multipliers from the
+        variational run), the scaled Jacobian ``[M - I, G_lambda]`` (``G_lambda`` by
+        central differences) and the tangent oriented along ``previous``."""
+        x, value = self.unscale(z)
+        run = flow(self.problem, x, value, self.periods, SAMPLES_PER_PERIOD * self.periods)
         h = 1e-6 * self.scales[-1]
-        plus = flow(self.problem, x, value + h, self.periods).end - x
-        minus = flow(self.problem, x, value - h, self.periods).end - x
+        plus = shoot(self.problem, x, value + h, self.periods)
+        minus = shoot(self.problem, x, value - h, self.periods)
         jac = np.empty((self.u, self.u + 1))
         jac[:, :-1] = run.matrix - np.eye(self.u)
         jac[:, -1] = (plus - minus) / (2.0 * h)                        # central difference
         sx = self.scales[:-1]
-        return (run.end - x) / sx, jac * self.scales[None, :] / sx[:, None]
+        jac = jac * self.scales[None, :] / sx[:, None]
+        orbit = make_orbit(self.problem, x, value, self.periods, run, iterations, float(np.linalg.norm(run.end - x)))
+        vector = np.linalg.svd(jac)[2][-1]                               # the null vector
+        return _Point(z, vector if vector @ previous >= 0 else -vector, orbit, iterations, jac)
 
-    def tangent(self, jac: np.ndarray, previous: np.ndarray) -> np.ndarray:
-        """Unit null vector of the scaled Jacobian, oriented along ``previous``."""
-        vector = np.linalg.svd(jac)[2][-1]
-        return vector if vector @ previous >= 0 else -vector
-
-    def correct(self, guess: np.ndarray, direction: np.ndarray, anchor: np.ndarray, arclength: float) -> _Point:
-        """Newton on ``G = 0`` and ``direction . (z - anchor) = arclength``; raises
-        :class:`SimulationError` when it does not converge."""
+    def correct(self, guess: np.ndarray, direction: np.ndarray, anchor: np.ndarray, arclength: float,
+                jac: np.ndarray) -> _Point:
+        """Chord-Newton iterations on ``G = 0`` and ``direction . (z - anchor) = arclength``
+        with the Jacobian ``jac`` of the last point (Allgower & Georg 2003, sec. 6.1);
+        raises :class:`SimulationError` when they do not converge."""
         z = guess.copy()
+        full = np.vstack([jac, direction])
+        last = math.inf
         for iteration in range(1, self.max_corrections + 1):
-            residual, jac = self.system(z)
-            full = np.vstack([jac, direction])
-            rhs = np.concatenate([residual, [direction @ (z - anchor) - arclength]])
+            rhs = np.concatenate([self.residual(z), [direction @ (z - anchor) - arclength]])
             step = np.linalg.solve(full, -rhs)
-            if not np.linalg.norm(step) < 0.5:                       # diverging: half the scale in one step
+            size = float(np.linalg.norm(step))
+            if not size < min(0.5, 0.8 * last if iteration > 2 else 0.5):   # diverging or stalling
                 break
             z = z + step
-            if np.linalg.norm(step) < self.tolerance * (1.0 + np.linalg.norm(z)) and \
-                    np.linalg.norm(residual) < math.sqrt(self.tolerance):
-                residual, jac = self.system(z)
-                x, value = self.unscale(z)
-                run = flow(self.problem, x, value, self.periods, SAMPLES_PER_PERIOD * self.periods)
-                orbit = make_orbit(self.problem, x, value, self.periods, run, iteration,
-                               float(np.linalg.norm(residual * self.scales[:-1])))
-                return _Point(z, self.tangent(jac, direction), orbit, iteration)
+            last = size
+            if size < self.tolerance * (1.0 + np.linalg.norm(z)):
+                return self.point(z, direction, iteration)
         raise SimulationError("the corrector did not converge")
 
 
@@ -175,7 +179,7 @@ def _locate(job: _Continuation, a: _Point, b: _Point, kind: str, max_iterations:
         else:
             s = hi[0] - f_hi * (hi[0] - lo[0]) / (f_hi - f_lo)
         try:
-            point = job.correct(a.z + s * a.tangent, a.tangent, a.z, s)
+            point = job.correct(a.z + s * a.tangent, a.tangent, a.z, s, a.jacobian)
         except (SimulationError, ParameterError):
             return None
         f = value(point)
@@ -233,7 +237,7 @@ def _grazing_end(orbits: list[Orbit]) -> list[Bifurcation]:
 
 def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0.01, min_step: float = 1e-6,
                     max_step: float = 0.1, max_points: int = 500, tolerance: float = 1e-10,
-                    max_corrections: int = 8, progress: Callable[[Orbit], None] | None = None) -> Branch:
+                    max_corrections: int = 15, progress: Callable[[Orbit], None] | None = None) -> Branch:
     """Continue the orbit ``start`` in the problem's scalar parameter towards ``stop``.
 
     Parameters
@@ -274,10 +278,10 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
     scales = np.r_[np.maximum(x0, max(0.1 * x0.max(), 1e-12)), max(abs(start.parameter), 1e-12)]
     job = _Continuation(problem, start.periods, scales, tolerance, max_corrections)
     z0 = np.r_[start.state, start.parameter] / scales
-    _, jac = job.system(z0)
     seed = np.zeros(z0.size)
     seed[-1] = direction
-    point = _Point(z0, job.tangent(jac, seed), start, start.iterations)
+    point = job.point(z0, seed, start.iterations)
+    point.orbit = start
     branch = Branch([start], [], "")
     if progress:
         progress(start)
@@ -293,10 +297,11 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
             if last_step:                                  # land on the edge: the parameter fixed there
                 axis = np.zeros(point.z.size)
                 axis[-1] = 1.0
-                new = job.correct(point.z + ds * point.tangent, axis, np.zeros(point.z.size), edge / scales[-1])
-                new.tangent = point.tangent if new.tangent @ point.tangent >= 0 else -new.tangent
+                new = job.correct(point.z + ds * point.tangent, axis, np.zeros(point.z.size), edge / scales[-1],
+                                  point.jacobian)
+                new.tangent = new.tangent if new.tangent @ point.tangent >= 0 else -new.tangent
             else:
-                new = job.correct(point.z + ds * point.tangent, point.tangent, point.z, ds)
+                new = job.correct(point.z + ds * point.tangent, point.tangent, point.z, ds, point.jacobian)
         except (SimulationError, ParameterError):
             ds *= 0.5
             if ds < min_step:
@@ -312,5 +317,5 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         value = new.orbit.parameter
         if last_step or not (lo - 1e-12 * scales[-1] <= value <= hi + 1e-12 * scales[-1]):
             return Branch(branch.orbits, branch.bifurcations, f"{problem.name} reached the end of its range")
-        ds = min(ds * 1.5, max_step) if new.iterations <= 3 else max(ds * 0.7, min_step) if new.iterations > 5 else ds
+        ds = min(ds * 1.5, max_step) if new.iterations <= 4 else max(ds * 0.7, min_step) if new.iterations > 8 else ds
     return Branch(branch.orbits, branch.bifurcations, f"{max_points} points computed")

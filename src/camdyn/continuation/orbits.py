@@ -24,7 +24,7 @@ from camdyn.errors import ParameterError, SimulationError
 from camdyn.integrator import driver
 from camdyn.systems import registry as systems
 
-__all__ = ["Flow", "Orbit", "flow", "find_orbit", "make_orbit", "transient_state", "STABILITY_MARGIN"]
+__all__ = ["Flow", "Orbit", "flow", "find_orbit", "make_orbit", "shoot", "transient_state", "STABILITY_MARGIN"]
 
 #: A multiplier counts as inside the unit circle when its modulus is below 1 - this [-].
 STABILITY_MARGIN = 1e-7
@@ -167,6 +167,24 @@ def _guard_minimum(system_id: int, p: np.ndarray, times: np.ndarray, states: np.
         if curvature > 0:                                          # vertex of the parabola
             return float(middle - (right - left) ** 2 / (8.0 * curvature))
     return float(sampled[i])
+
+
+def shoot(problem: Problem, x, value: float, periods: int = 1) -> np.ndarray:
+    """The unknown components after ``periods`` forcing periods from unknowns ``x`` at
+    ``t_start``, by the plain model without its state-transition matrix (several times
+    cheaper: the matrix's error control takes the variational run's steps)."""
+    p, period = problem.build(float(value))
+    t0 = problem.t_start
+    t1 = t0 + periods * period
+    y, _, _, counters = driver.integrate(problem.system_id, p, _full(problem, np.asarray(x, dtype=float)), t0, t1,
+                                         np.array([t1]), problem.rtol, problem.atol, period / 32.0,
+                                         driver.METHOD_DOP853, 50_000_000, 100_000, True)
+    status = int(counters[driver.COUNT_STATUS])
+    if status == driver.STATUS_INTERRUPTED:
+        raise KeyboardInterrupt
+    if status != driver.STATUS_OK:
+        raise SimulationError(f"shooting run at {problem.name} = {value:g} {driver.STATUS_MESSAGES[status]}")
+    return y[-1, :problem.unknowns].copy()
 
 
 def transient_state(problem: Problem, periods: int = 50, value: float | None = None) -> np.ndarray:
