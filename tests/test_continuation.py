@@ -188,3 +188,43 @@ def test_cam_follower_floquet_exponents_are_the_linear_models_eigenvalues(chapte
     assert abs(exponent.real - upper.real) < 0.01 * abs(upper.real), (exponent, upper)
     assert abs(exponent.imag - upper.imag) < 0.01 * abs(upper.imag), (exponent, upper)
     assert abs(orbit.multipliers[0]) == pytest.approx(abs(orbit.multipliers[1]), rel=1e-9)   # a complex pair
+
+
+def test_continue_cli_json_netcdf_and_figure(tmp_path, capsys):
+    import json
+
+    import xarray as xr
+
+    from camdyn.cli.app import main
+    out, plot = tmp_path / "branch.nc", tmp_path / "branch.png"
+    args = ["continue", "sundar2014-friction", "--set", "cam.runout=0.875mm", "--from", "11Hz", "--to", "11.6Hz",
+            "--transient", "5", "--out", str(out), "--plot", str(plot), "--json"]
+    assert main(args) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["schema"] == "camdyn.continue/1"
+    points = doc["branches"][0]
+    assert points[0]["parameter"] == pytest.approx(11.0) and points[-1]["parameter"] == pytest.approx(11.6, abs=1e-9)
+    for point in points:
+        assert point["stable"] and point["impacts_per_period"] == 0
+        assert point["period"] == pytest.approx(1.0 / point["parameter"], rel=1e-12)
+        assert point["max_normal_force"] > 0 and 0 < point["max_penetration"] < 1e-4
+        assert len(point["multipliers"]) == 2 and all(math.hypot(*m) < 1e-3 for m in point["multipliers"])
+    assert doc["bifurcations"] == []
+    ds = xr.load_dataset(out, engine="h5netcdf")
+    assert ds["parameter"].attrs["units"] == "Hz" and ds["max_normal_force"].attrs["units"] == "N"
+    np.testing.assert_allclose(ds["parameter"].values, [p["parameter"] for p in points], rtol=1e-12)
+    assert plot.stat().st_size > 1000
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--parameter", "contact.damping", "--from", "1", "--to", "2"], "not a continuous parameter"),
+    (["--parameter", "cam.nonsense", "--from", "1", "--to", "2"], "unknown parameter"),
+    (["--from", "11Hz", "--to", "11Hz"], "must differ"),
+    (["--from", "11Hz", "--to", "12Hz", "--period", "0"], "--period"),
+    (["--from", "11Hz", "--to", "12Hz", "--out", "branch.txt"], ".nc"),
+])
+def test_continue_cli_refuses_bad_input_in_one_line(args, words, capsys):
+    from camdyn.cli.app import main
+    assert main(["continue", "sundar2014-friction", *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error:") and words in err[0], err

@@ -68,7 +68,7 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         files.append(announce(plot_branches(branches_dataset(problem, records, bifurcations), plot), json_))
     if json_:
         summary = {"parameter": parameter, "units": unit, "points": len(branch.orbits),
-                   "stable_points": sum(o.stable for o in branch.orbits), "bifurcations": len(bifurcations),
+                   "stable_points": sum(o.stable for o in branch.orbits), "bifurcation_count": len(bifurcations),
                    "stopped": branch.stopped}
         emit_json("continue", summary, branches=records, bifurcations=bifurcations, files=files)
         return
