@@ -159,7 +159,9 @@ def _tests(point: _Point) -> dict:
 
 def _locate(job: _Continuation, a: _Point, b: _Point, kind: str, max_iterations: int = 60) -> _Point | None:
     """The point between ``a`` and ``b`` where test ``kind`` vanishes (or, for grazing,
-    where the impact count changes), along the arclength from ``a``."""
+    where the impact count changes), along the arclength from ``a``. Where the corrector
+    fails inside the bracket (near grazing it may), the last point it reached stands for
+    the bifurcation, less accurately."""
     s_b = float(a.tangent @ (b.z - a.z))
     lo, hi = (0.0, a), (s_b, b)
 
@@ -181,7 +183,7 @@ def _locate(job: _Continuation, a: _Point, b: _Point, kind: str, max_iterations:
         try:
             point = job.correct(a.z + s * a.tangent, a.tangent, a.z, s, a.jacobian)
         except (SimulationError, ParameterError):
-            return None
+            break                                 # the corrector fails here: keep the bracket's best point
         f = value(point)
         best = point
         if f == 0.0 or (kind != "grazing" and abs(f) < 1e-14):
