@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from camdyn.continuation.orbits import SAMPLES_PER_PERIOD, Orbit, flow, make_orbit, shoot
+from camdyn.continuation.orbits import SAMPLES_PER_PERIOD, Flow, Orbit, flow, make_orbit, shoot
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError, SimulationError
 
@@ -109,10 +109,9 @@ class _Continuation:
         x, value = self.unscale(z)
         return (shoot(self.problem, x, value, self.periods) - x) / self.scales[:-1]
 
-    def point(self, z: np.ndarray, previous: np.ndarray, iterations: int) -> _Point:
-        """The converged point at ``z``: its orbit (monodromy and multipliers from the
-        variational run), the scaled Jacobian ``[M - I, G_lambda]`` (``G_lambda`` by
-        central differences) and the tangent oriented along ``previous``."""
+    def linearization(self, z: np.ndarray) -> tuple[Flow, np.ndarray]:
+        """The variational run at scaled ``z`` (sampled) and the scaled Jacobian
+        ``[M - I, G_lambda]`` there (``G_lambda`` by central differences)."""
         x, value = self.unscale(z)
         run = flow(self.problem, x, value, self.periods, SAMPLES_PER_PERIOD * self.periods)
         h = 1e-6 * self.scales[-1]
@@ -122,21 +121,43 @@ class _Continuation:
         jac[:, :-1] = run.matrix - np.eye(self.u)
         jac[:, -1] = (plus - minus) / (2.0 * h)                        # central difference
         sx = self.scales[:-1]
-        jac = jac * self.scales[None, :] / sx[:, None]
+        return run, jac * self.scales[None, :] / sx[:, None]
+
+    def point(self, z: np.ndarray, previous: np.ndarray, iterations: int) -> _Point:
+        """The converged point at ``z``: its orbit (monodromy and multipliers from the
+        variational run), its Jacobian and the tangent oriented along ``previous``."""
+        run, jac = self.linearization(z)
+        x, value = self.unscale(z)
         orbit = make_orbit(self.problem, x, value, self.periods, run, iterations, float(np.linalg.norm(run.end - x)))
         vector = np.linalg.svd(jac)[2][-1]                               # the null vector
         return _Point(z, vector if vector @ previous >= 0 else -vector, orbit, iterations, jac)
 
     def correct(self, guess: np.ndarray, direction: np.ndarray, anchor: np.ndarray, arclength: float,
                 jac: np.ndarray) -> _Point:
-        """Chord-Newton iterations on ``G = 0`` and ``direction . (z - anchor) = arclength``
-        with the Jacobian ``jac`` of the last point (Allgower & Georg 2003, sec. 6.1);
-        raises :class:`SimulationError` when they do not converge."""
+        """Corrector on ``G = 0`` and ``direction . (z - anchor) = arclength``: chord
+        iterations with the Jacobian ``jac`` of the last point (Allgower & Georg 2003,
+        sec. 6.1), then, if they fail (the Jacobian jumps where the orbit gains or loses
+        an event), Newton's iterations with the Jacobian renewed at each; raises
+        :class:`SimulationError` when neither converges."""
+        try:
+            return self._iterate(guess, direction, anchor, arclength, jac)
+        except (SimulationError, ParameterError):
+            return self._iterate(guess, direction, anchor, arclength, None)
+
+    def _iterate(self, guess, direction, anchor, arclength, jac) -> _Point:
+        """Chord iterations with ``jac``, or Newton's with a renewed Jacobian if None."""
         z = guess.copy()
-        full = np.vstack([jac, direction])
         last = math.inf
         for iteration in range(1, self.max_corrections + 1):
-            rhs = np.concatenate([self.residual(z), [direction @ (z - anchor) - arclength]])
+            if jac is None:
+                run, fresh = self.linearization(z)
+                x, _ = self.unscale(z)
+                residual = (run.end - x) / self.scales[:-1]
+                full = np.vstack([fresh, direction])
+            else:
+                residual = self.residual(z)
+                full = np.vstack([jac, direction])
+            rhs = np.concatenate([residual, [direction @ (z - anchor) - arclength]])
             step = np.linalg.solve(full, -rhs)
             size = float(np.linalg.norm(step))
             if not size < min(0.5, 0.8 * last if iteration > 2 else 0.5):   # diverging or stalling
