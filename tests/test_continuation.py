@@ -69,17 +69,27 @@ def _impact_orbit(forcing, sigma, guess):
     return solution
 
 
-def _closed_form_multipliers(forcing, sigma, t_impact, v):
-    """Eigenvalues of the monodromy: saltation at the impact times the free flow over T."""
-    a = np.array([[0.0, 1.0], [-W_NATURAL ** 2, -2 * ZETA * W_NATURAL]])
+HOMOGENEOUS = np.array([[0.0, 1.0], [-W_NATURAL ** 2, -2 * ZETA * W_NATURAL]])
+
+
+def _saltation(forcing, sigma, t_impact, v):
+    """The impact's saltation matrix at t_impact [s], rebound velocity v [m/s]."""
     v_minus = -v / RESTITUTION
     accel = FORCE * math.cos(forcing * t_impact) - W_NATURAL ** 2 * sigma
     f_minus = np.array([v_minus, accel - 2 * ZETA * W_NATURAL * v_minus])
     f_plus = np.array([v, accel - 2 * ZETA * W_NATURAL * v])
     reset, normal = np.diag([1.0, -RESTITUTION]), np.array([-1.0, 0.0])   # g = sigma - x
-    saltation = reset + np.outer(f_plus - reset @ f_minus, normal) / (normal @ f_minus)
-    values = np.linalg.eigvals(saltation @ expm(a * 2 * math.pi / forcing))
+    return reset + np.outer(f_plus - reset @ f_minus, normal) / (normal @ f_minus)
+
+
+def _by_modulus(values):
     return values[np.argsort(-np.abs(values))]
+
+
+def _closed_form_multipliers(forcing, sigma, t_impact, v):
+    """Eigenvalues of the monodromy: saltation at the impact times the free flow over T."""
+    monodromy = _saltation(forcing, sigma, t_impact, v) @ expm(HOMOGENEOUS * 2 * math.pi / forcing)
+    return _by_modulus(np.linalg.eigvals(monodromy))
 
 
 def _rigid(forcing, sigma=0.0):
@@ -119,6 +129,30 @@ def test_rigid_impact_branch_locates_the_period_doubling_of_the_closed_form():
     assert all(o.parameter < expected for o, s in zip(branch.orbits, stable) if s)
     assert all(o.parameter > expected for o, s in zip(branch.orbits, stable) if not s)
     assert branch.orbits[-1].parameter == pytest.approx(3.0, abs=1e-12)
+
+
+def test_rigid_impact_period_two_orbit_matches_the_closed_form():
+    forcing, sigma = 2.68, 0.0                                  # just past the period doubling
+    period = 2 * math.pi / forcing
+
+    def residual(u):              # two impacts per 2T: (t1, v1) -> (t2, -v2 / r) -> (t1 + 2T, -v1 / r)
+        t1, v1, t2, v2 = u
+        x, v = _free(forcing, t1, sigma, v1, t2 - t1)
+        first = [x - sigma, v + v2 / RESTITUTION]
+        x, v = _free(forcing, t2, sigma, v2, t1 + 2 * period - t2)
+        return first + [x - sigma, v + v1 / RESTITUTION]
+    t1, v1, t2, v2 = fsolve(residual, [1.0, -0.2, 1.2 + period, -0.45], xtol=1e-14)
+    assert np.max(np.abs(residual([t1, v1, t2, v2]))) < 1e-12 and abs(v1 - v2) > 0.01   # not the period-1 orbit
+    for start, v, span in ((t1, v1, t2 - t1), (t2, v2, t1 + 2 * period - t2)):
+        assert max(_free(forcing, start, sigma, v, s)[0] for s in np.linspace(0.01, span - 0.01, 200)) < sigma
+    orbit = find_orbit(_rigid(forcing), periods=2, transient=400)
+    # its state at t = 0 = 2T: flight from the last impact before 2T, either phase of the orbit
+    phases = [_free(forcing, t, sigma, v, 2 * period - t) for t, v in ((t2, v2), (t1 + period, v1))]
+    assert min(np.max(np.abs(orbit.state - np.array(phase))) for phase in phases) < 1e-9
+    monodromy = (_saltation(forcing, sigma, t1, v1) @ expm(HOMOGENEOUS * (t1 + 2 * period - t2))
+                 @ _saltation(forcing, sigma, t2, v2) @ expm(HOMOGENEOUS * (t2 - t1)))
+    np.testing.assert_allclose(orbit.multipliers, _by_modulus(np.linalg.eigvals(monodromy)), rtol=0, atol=1e-9)
+    assert orbit.period == pytest.approx(2 * period, rel=1e-15) and orbit.impacts_per_period == 2 and orbit.stable
 
 
 def test_shooting_refuses_bad_input_and_reports_no_convergence():

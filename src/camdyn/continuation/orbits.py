@@ -265,7 +265,8 @@ def find_orbit(problem: Problem, start=None, value: float | None = None, periods
             return make_orbit(problem, x, value, periods, run, iteration, float(np.linalg.norm(residual)))
         if iteration < max_iterations:
             x = x + np.linalg.lstsq(run.matrix - eye, -residual, rcond=None)[0]
-    raise SimulationError(f"no period-{periods} orbit found at {problem.name} = {value:g} {problem.unit}: Newton's "
+    unit = f" {problem.unit}" if problem.unit else ""
+    raise SimulationError(f"no period-{periods} orbit found at {problem.name} = {value:g}{unit}: Newton's "
                           f"method did not converge in {max_iterations} iterations (last residual "
                           f"{float(np.linalg.norm(residual)):.3g}); start closer (a longer transient) or change "
                           f"the parameter")
