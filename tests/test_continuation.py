@@ -262,3 +262,19 @@ def test_continue_cli_refuses_bad_input_in_one_line(args, words, capsys):
     assert main(["continue", "sundar2014-friction", *args]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("error:") and words in err[0], err
+
+
+def test_cam_follower_branch_loses_contact_at_the_inverse_kinematics_speed():
+    import camdyn
+    from camdyn.analysis.kinematics import loss_of_contact_speed
+    from camdyn.continuation.results import trace_branch
+    system = camdyn.load_system("sundar2014-friction")                  # e/a = 0.1
+    # rigid contact: the lowest speed at which the cam's motion needs a pulling force
+    expected = loss_of_contact_speed(system)
+    _, branch = trace_branch(system, "motion.speed", 17.5, 18.1, transient=30, step=0.01, max_points=20)
+    assert branch.orbits[0].impacts_per_period == 0 and branch.orbits[-1].impacts_per_period > 0
+    grazing = [b for b in branch.bifurcations if b.kind == "grazing"]
+    assert grazing, [b.kind for b in branch.bifurcations]
+    # the rigid-contact kinematics leave out the Hertz contact's compliance and the follower's
+    # dynamic response, of relative order (f / f_n)^2 = (18 Hz / 961 Hz)^2 = 4e-4
+    assert abs(grazing[0].parameter - expected) < 2e-3 * expected, (grazing[0].parameter, expected)
