@@ -5,6 +5,7 @@ here from its free motion between impacts written out, its monodromy with the im
 saltation matrix, its period doubling (a multiplier at -1) and its grazing (the
 non-impacting orbit's amplitude reaching the wall)."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -278,3 +279,31 @@ def test_cam_follower_branch_loses_contact_at_the_inverse_kinematics_speed():
     # the rigid-contact kinematics leave out the Hertz contact's compliance and the follower's
     # dynamic response, of relative order (f / f_n)^2 = (18 Hz / 961 Hz)^2 = 4e-4
     assert abs(grazing[0].parameter - expected) < 2e-3 * expected, (grazing[0].parameter, expected)
+
+
+def test_branch_figure_draws_unstable_dashed_and_is_readable(tmp_path, monkeypatch):
+    from camdyn.continuation.results import branches_dataset
+    from camdyn.plotting import layout_problems, style
+    from camdyn.plotting.branches import plot_branches
+    seen = []
+
+    def hook(fig):
+        styles = {(line.get_linestyle(), round(float(np.mean(line.get_xdata())), 3))
+                  for line in fig.axes[0].get_lines()}
+        seen.append((layout_problems(fig), styles, fig.axes[1].get_xlabel()))
+    monkeypatch.setattr(style, "SAVE_HOOKS", [hook])
+    speeds = np.linspace(10.0, 20.0, 11)
+    records = [[{"parameter": s, "stable": s < 15.0, "multipliers": [[-0.1 * s / 1.5, 0.0], [0.01, 0.0]],
+                 "period": 1 / s, "impacts_per_period": 1, "max_normal_force": 5.0 + s,
+                 "max_penetration": 1e-6, "state": [0.07, 0.1]} for s in speeds]]
+    problem = model_problem(systems.RIGID_IMPACT, [1.0, 0.05, 1.0, 2.0, 0.0, 0.8], [-1.0, 0.0, 0.0])
+    problem = dataclasses.replace(problem, name="motion.speed", unit="Hz")
+    ds = branches_dataset(problem, records, [{"kind": "period-doubling", "parameter": 15.0, "branch": 0}])
+    assert ds["max_normal_force"].attrs["units"] == "N"
+    assert ds["bifurcation_kind"].values.tolist() == ["period-doubling"]
+    plot_branches(ds, tmp_path / "branch.png")
+    problems, styles, xlabel = seen[0]
+    assert problems == [], problems
+    # stable 10-14 Hz solid (mean 12); unstable 15-20 Hz dashed, joined to the last stable point (mean 17)
+    assert ("-", 12.0) in styles and ("--", 17.0) in styles, styles
+    assert "Hz" in xlabel
