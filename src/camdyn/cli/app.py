@@ -17,7 +17,7 @@ import warnings
 import typer
 
 from camdyn import __version__
-from camdyn.cli import analysis, impact, records, simulate, sweep
+from camdyn.cli import analysis, continuation, impact, records, simulate, sweep
 from camdyn.cli.common import compile_notice
 from camdyn.errors import RUNTIME_ERRORS, CamdynError, SweepInterrupted
 
@@ -87,6 +87,7 @@ app.command("bifurcation")(_interruptible(sweep.bifurcation))
 app.command("lyapunov")(_interruptible(sweep.lyapunov))
 app.command("map")(_interruptible(analysis.regime_map_command))
 app.command("spectrum")(_interruptible(analysis.spectrum))
+app.command("continue")(_interruptible(continuation.continue_branch))
 
 
 def _on_signal(signum, frame):

@@ -1,0 +1,97 @@
+"""``camdyn continue PRESET_OR_TOML``: a branch of periodic orbits in one parameter, with
+its stability and bifurcations (pseudo-arclength continuation of shooting solutions)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import List, Optional
+
+import typer
+
+from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, err_console, load_source
+from camdyn.cli.outputs import announce, check_outputs, emit_json
+from camdyn.errors import ParameterError
+
+
+def _value(text: str, key: str, unit: str) -> float:
+    """A parameter value [SI] from text with a unit (a bare number: already SI)."""
+    from camdyn.params.units import parse_quantity, parse_speed
+
+    if unit == "Hz":
+        return parse_speed(text, key)
+    try:
+        return float(text)
+    except ValueError:
+        return float(parse_quantity(text, unit, key))
+
+
+def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
+                    set_: Optional[List[str]] = SetOption,
+                    parameter: str = typer.Option("motion.speed", help="Dotted key continued, e.g. motion.speed, "
+                                                                       "cam.runout (camdyn presets keys)."),
+                    start: str = typer.Option(..., "--from", help="First value, with a unit: 5Hz, 1.2mm."),
+                    stop: str = typer.Option(..., "--to", help="Last value, with a unit."),
+                    period: int = typer.Option(1, help="Forcing periods per orbit period (2 for period-2 orbits)."),
+                    step: float = typer.Option(0.02, help="First arclength step, relative to the parameter's "
+                                                          "start value [-]."),
+                    max_points: int = typer.Option(200, help="Most orbits on the branch."),
+                    transient: int = typer.Option(50, help="Cam periods simulated before the first orbit is "
+                                                           "sought."),
+                    plot: Optional[Path] = typer.Option(None, help="Figure of the branch (.png, .pdf, ...)."),
+                    out: Optional[Path] = typer.Option(None, help="Result file (.nc)."),
+                    force: bool = ForceOption,
+                    quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
+                    json_: bool = JsonOption):
+    """Continue periodic orbits over a parameter range: stability from the Floquet
+    multipliers, and folds, period doublings, Neimark-Sacker bifurcations and grazing
+    located on the way (docs/continuation.md)."""
+    from camdyn.continuation.problem import parameter_unit
+    from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset
+
+    check_outputs(netcdf=out, figure=plot, force=force)
+    system = load_source(source, set_)
+    unit = parameter_unit(system, parameter)
+    first, last = _value(start, "--from", unit), _value(stop, "--to", unit)
+    if first == last:
+        raise ParameterError("--from and --to must differ")
+    if period < 1 or max_points < 2 or transient < 1 or not step > 0:
+        raise ParameterError("--period and --transient must be at least 1, --max-points at least 2, --step positive")
+    problem, branch = _trace(system, parameter, first, last, period, step, max_points, transient, quiet or json_)
+    records = [branch_records(problem, branch)]
+    bifurcations = bifurcation_records([branch])
+    files = []
+    if out is not None:
+        from camdyn.io.netcdf import save_netcdf
+        files.append(announce(save_netcdf(branches_dataset(problem, records, bifurcations), out), json_))
+    if plot is not None:
+        from camdyn.plotting.branches import plot_branches
+        files.append(announce(plot_branches(branches_dataset(problem, records, bifurcations), plot), json_))
+    if json_:
+        summary = {"parameter": parameter, "units": unit, "points": len(branch.orbits),
+                   "stable_points": sum(o.stable for o in branch.orbits), "bifurcation_count": len(bifurcations),
+                   "stopped": branch.stopped}
+        emit_json("continue", summary, branches=records, bifurcations=bifurcations, files=files)
+        return
+    stable = sum(o.stable for o in branch.orbits)
+    console.print(f"{len(branch.orbits)} orbits of period {period} over {parameter} = {branch.orbits[0].parameter:.6g}"
+                  f" to {branch.orbits[-1].parameter:.6g} {unit}, {stable} stable; {branch.stopped}",
+                  highlight=False, soft_wrap=True)
+    for item in bifurcations:
+        console.print(f"  {item['kind']} at {parameter} = {item['parameter']:.9g} {unit}", highlight=False,
+                      soft_wrap=True)
+
+
+def _trace(system, parameter, first, last, period, step, max_points, transient, quiet):
+    """The branch, with a progress bar over the parameter range unless ``quiet``."""
+    from camdyn.continuation.results import trace_branch
+
+    if quiet:
+        return trace_branch(system, parameter, first, last, period, step, max_points, transient)
+    from rich.progress import Progress
+
+    with Progress(console=err_console, transient=True) as bar:
+        task = bar.add_task(f"continuing in {parameter}", total=1.0)
+
+        def progress(orbit):
+            bar.update(task, completed=min(max((orbit.parameter - first) / (last - first), 0.0), 1.0))
+        return trace_branch(system, parameter, first, last, period, step, max_points, transient, progress=progress)

@@ -1,0 +1,12 @@
+"""Periodic orbits of the forced hybrid systems, their Floquet multipliers, and their
+continuation in a parameter with bifurcation detection (:mod:`.orbits`, :mod:`.branches`;
+the problem definitions in :mod:`.problem`, the cam-follower's branches and their tables
+in :mod:`.results`)."""
+
+from camdyn.continuation.branches import Bifurcation, Branch, continue_orbits
+from camdyn.continuation.orbits import Orbit, find_orbit, flow, transient_state
+from camdyn.continuation.problem import Problem, model_problem, system_problem
+from camdyn.continuation.results import trace_branch
+
+__all__ = ["Bifurcation", "Branch", "Orbit", "Problem", "continue_orbits", "find_orbit", "flow", "model_problem",
+           "system_problem", "trace_branch", "transient_state"]

@@ -1,0 +1,344 @@
+"""Pseudo-arclength continuation of periodic orbits in one parameter, with detection of
+folds, period doublings, Neimark-Sacker bifurcations and grazing along the branch.
+
+The unknowns are ``u = (x, lambda)``: the orbit's state at the phase ``t0`` and the
+parameter. On the branch ``G(u) = phi(t0 + kT; t0, x, lambda) - x = 0``, with the
+Jacobian ``[M - I, G_lambda]`` (``M`` the saltation-corrected monodromy matrix,
+``G_lambda`` by central differences). A step predicts along the unit tangent ``t``, the
+null vector of that Jacobian, and corrects by Newton's method on ``G(u) = 0`` together
+with ``t . (u - u_predicted) = 0`` (Keller's pseudo-arclength condition; Allgower &
+Georg 2003, *Introduction to Numerical Continuation Methods*, ch. 2 and 6; Seydel 2010,
+sec. 4.4-4.5). The step shrinks when the corrector fails and grows when it converges
+fast. All of it runs in scaled variables ``u / s`` so that a parameter in Hz and a state
+in rad weigh alike in the arclength.
+
+Test functions, evaluated at every point; a sign change between two points is located
+by the secant method (Illinois variant) along the arclength (Seydel 2010, sec. 5.3):
+
+* fold: the parameter component of the tangent;
+* period doubling: ``det(M + I)`` (a real multiplier crosses -1);
+* Neimark-Sacker: ``prod_{i<j} (mu_i mu_j - 1)`` (a complex pair crosses the unit
+  circle; a real pair with product 1, a neutral saddle, is discarded after location);
+* grazing: the number of impacts per period changes (located by bisection, as the
+  orbit's topology changes there: Di Bernardo et al. 2008, *Piecewise-smooth Dynamical
+  Systems*, ch. 8).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from camdyn.continuation.orbits import SAMPLES_PER_PERIOD, Flow, Orbit, flow, make_orbit, shoot
+from camdyn.continuation.problem import Problem
+from camdyn.errors import ParameterError, SimulationError
+
+__all__ = ["Bifurcation", "Branch", "continue_orbits", "KINDS"]
+
+#: The bifurcations detected, as named in results.
+KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing")
+
+
+@dataclass(frozen=True)
+class Bifurcation:
+    """A located bifurcation.
+
+    Attributes
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    parameter : float
+        The parameter's value there [its unit].
+    orbit : Orbit
+        The orbit at the located point.
+    """
+
+    kind: str
+    parameter: float
+    orbit: Orbit
+
+
+@dataclass(frozen=True)
+class Branch:
+    """A continued branch of periodic orbits.
+
+    Attributes
+    ----------
+    orbits : list of Orbit
+        The accepted points, in order along the branch.
+    bifurcations : list of Bifurcation
+        The located bifurcations, in order along the branch.
+    stopped : str
+        Why the continuation ended.
+    """
+
+    orbits: list[Orbit] = field(default_factory=list)
+    bifurcations: list[Bifurcation] = field(default_factory=list)
+    stopped: str = ""
+
+
+@dataclass
+class _Point:
+    z: np.ndarray          # scaled unknowns (x / sx, lambda / s_lambda)
+    tangent: np.ndarray    # unit tangent, scaled
+    orbit: Orbit
+    iterations: int
+    jacobian: np.ndarray   # scaled [M - I, G_lambda]
+
+
+class _Continuation:
+    """The state of one continuation: the problem, the scales and the settings."""
+
+    def __init__(self, problem: Problem, periods: int, scales: np.ndarray, tolerance: float, max_corrections: int):
+        self.problem = problem
+        self.periods = periods
+        self.scales = scales
+        self.tolerance = tolerance
+        self.max_corrections = max_corrections
+        self.u = problem.unknowns
+
+    def unscale(self, z: np.ndarray) -> tuple[np.ndarray, float]:
+        u = z * self.scales
+        return u[:-1], float(u[-1])
+
+    def residual(self, z: np.ndarray) -> np.ndarray:
+        """Scaled residual ``G / s_x`` at scaled ``z``, by the plain model."""
+        x, value = self.unscale(z)
+        return (shoot(self.problem, x, value, self.periods) - x) / self.scales[:-1]
+
+    def linearization(self, z: np.ndarray) -> tuple[Flow, np.ndarray]:
+        """The variational run at scaled ``z`` (sampled) and the scaled Jacobian
+        ``[M - I, G_lambda]`` there (``G_lambda`` by central differences)."""
+        x, value = self.unscale(z)
+        run = flow(self.problem, x, value, self.periods, SAMPLES_PER_PERIOD * self.periods)
+        h = 1e-6 * self.scales[-1]
+        plus = shoot(self.problem, x, value + h, self.periods)
+        minus = shoot(self.problem, x, value - h, self.periods)
+        jac = np.empty((self.u, self.u + 1))
+        jac[:, :-1] = run.matrix - np.eye(self.u)
+        jac[:, -1] = (plus - minus) / (2.0 * h)                        # central difference
+        sx = self.scales[:-1]
+        return run, jac * self.scales[None, :] / sx[:, None]
+
+    def point(self, z: np.ndarray, previous: np.ndarray, iterations: int) -> _Point:
+        """The converged point at ``z``: its orbit (monodromy and multipliers from the
+        variational run), its Jacobian and the tangent oriented along ``previous``."""
+        run, jac = self.linearization(z)
+        x, value = self.unscale(z)
+        orbit = make_orbit(self.problem, x, value, self.periods, run, iterations, float(np.linalg.norm(run.end - x)))
+        vector = np.linalg.svd(jac)[2][-1]                               # the null vector
+        return _Point(z, vector if vector @ previous >= 0 else -vector, orbit, iterations, jac)
+
+    def correct(self, guess: np.ndarray, direction: np.ndarray, anchor: np.ndarray, arclength: float,
+                jac: np.ndarray) -> _Point:
+        """Corrector on ``G = 0`` and ``direction . (z - anchor) = arclength``: chord
+        iterations with the Jacobian ``jac`` of the last point (Allgower & Georg 2003,
+        sec. 6.1), then, if they fail (the Jacobian jumps where the orbit gains or loses
+        an event), Newton's iterations with the Jacobian renewed at each; raises
+        :class:`SimulationError` when neither converges."""
+        try:
+            return self._iterate(guess, direction, anchor, arclength, jac)
+        except (SimulationError, ParameterError):
+            return self._iterate(guess, direction, anchor, arclength, None)
+
+    def _iterate(self, guess, direction, anchor, arclength, jac) -> _Point:
+        """Chord iterations with ``jac``, or Newton's with a renewed Jacobian if None."""
+        z = guess.copy()
+        last = math.inf
+        for iteration in range(1, self.max_corrections + 1):
+            if jac is None:
+                run, fresh = self.linearization(z)
+                x, _ = self.unscale(z)
+                residual = (run.end - x) / self.scales[:-1]
+                full = np.vstack([fresh, direction])
+            else:
+                residual = self.residual(z)
+                full = np.vstack([jac, direction])
+            rhs = np.concatenate([residual, [direction @ (z - anchor) - arclength]])
+            step = np.linalg.solve(full, -rhs)
+            size = float(np.linalg.norm(step))
+            if not size < min(0.5, 0.8 * last if iteration > 2 else 0.5):   # diverging or stalling
+                break
+            z = z + step
+            last = size
+            if size < self.tolerance * (1.0 + np.linalg.norm(z)):
+                return self.point(z, direction, iteration)
+        raise SimulationError("the corrector did not converge")
+
+
+def _tests(point: _Point) -> dict:
+    """The smooth test functions at a point."""
+    mu = point.orbit.multipliers
+    pairs = [mu[i] * mu[j] - 1.0 for i in range(mu.size) for j in range(i + 1, mu.size)]
+    return {"fold": float(point.tangent[-1]),
+            "period-doubling": float(np.real(np.prod(mu + 1.0))),
+            "neimark-sacker": float(np.real(np.prod(pairs))) if pairs else 1.0}
+
+
+def _locate(job: _Continuation, a: _Point, b: _Point, kind: str, max_iterations: int = 60) -> _Point | None:
+    """The point between ``a`` and ``b`` where test ``kind`` vanishes (or, for grazing,
+    where the impact count changes), along the arclength from ``a``. Where the corrector
+    fails inside the bracket (near grazing it may), the last point it reached stands for
+    the bifurcation, less accurately."""
+    s_b = float(a.tangent @ (b.z - a.z))
+    lo, hi = (0.0, a), (s_b, b)
+
+    def value(point: _Point) -> float:
+        if kind == "grazing":
+            return 1.0 if point.orbit.impacts_per_period == a.orbit.impacts_per_period else -1.0
+        return _tests(point)[kind]
+
+    f_lo, f_hi = value(a), value(b)
+    side = 0
+    best = b
+    for _ in range(max_iterations):
+        if abs(hi[0] - lo[0]) < 1e-12 * (1.0 + abs(s_b)):
+            break
+        if kind == "grazing":
+            s = 0.5 * (lo[0] + hi[0])
+        else:
+            s = hi[0] - f_hi * (hi[0] - lo[0]) / (f_hi - f_lo)
+        try:
+            point = job.correct(a.z + s * a.tangent, a.tangent, a.z, s, a.jacobian)
+        except (SimulationError, ParameterError):
+            break                                 # the corrector fails here: keep the bracket's best point
+        f = value(point)
+        best = point
+        if f == 0.0 or (kind != "grazing" and abs(f) < 1e-14):
+            break
+        if (f > 0) == (f_lo > 0):
+            lo, f_lo = (s, point), f
+            if side == -1 and kind != "grazing":
+                f_hi *= 0.5                                           # Illinois
+            side = -1
+        else:
+            hi, f_hi = (s, point), f
+            if side == 1 and kind != "grazing":
+                f_lo *= 0.5
+            side = 1
+    if kind == "neimark-sacker":
+        mu = best.orbit.multipliers
+        if not np.any(np.abs(mu.imag) > 1e-8 * np.abs(mu)):
+            return None                                               # a neutral saddle
+    return best
+
+
+def _detect(job: _Continuation, a: _Point, b: _Point) -> list[Bifurcation]:
+    found = []
+    before, after = _tests(a), _tests(b)
+    for kind in ("fold", "period-doubling", "neimark-sacker"):
+        if before[kind] * after[kind] < 0:
+            point = _locate(job, a, b, kind)
+            if point is not None:
+                found.append(Bifurcation(kind, point.orbit.parameter, point.orbit))
+    if a.orbit.impacts_per_period != b.orbit.impacts_per_period:
+        point = _locate(job, a, b, "grazing")
+        if point is not None:
+            found.append(Bifurcation("grazing", point.orbit.parameter, point.orbit))
+    return sorted(found, key=lambda item: float(a.tangent @ (np.r_[item.orbit.state, item.parameter] / job.scales)))
+
+
+def _grazing_end(orbits: list[Orbit]) -> list[Bifurcation]:
+    """A branch that ends because its orbit touches the contact guard (the smallest guard
+    value has fallen to a thousandth of its largest along the branch): a grazing
+    bifurcation at the parameter where the secant through the last two points' smallest
+    guard values reaches zero. Past it the orbit gains an impact whose monodromy grows as
+    the inverse of the impact velocity (Di Bernardo et al. 2008, sec. 8.2), so the branch
+    cannot be continued through it."""
+    if len(orbits) < 2:
+        return []
+    a, b = orbits[-2], orbits[-1]
+    largest = max(abs(o.guard_minimum) for o in orbits)
+    if not (0 <= b.guard_minimum < 1e-3 * largest and a.guard_minimum > b.guard_minimum):
+        return []
+    slope = (b.guard_minimum - a.guard_minimum) / (b.parameter - a.parameter)
+    return [Bifurcation("grazing", b.parameter - b.guard_minimum / slope, b)]
+
+
+def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0.01, min_step: float = 1e-6,
+                    max_step: float = 0.1, max_points: int = 500, tolerance: float = 1e-10,
+                    max_corrections: int = 15, progress: Callable[[Orbit], None] | None = None) -> Branch:
+    """Continue the orbit ``start`` in the problem's scalar parameter towards ``stop``.
+
+    Parameters
+    ----------
+    problem : Problem
+        The system and its scalar parameter.
+    start : Orbit
+        A converged orbit (:func:`~camdyn.continuation.orbits.find_orbit`) of ``problem``.
+    stop : float
+        The parameter's far end [its unit]: continuation starts towards it and ends when
+        the parameter leaves the interval between ``start.parameter`` and ``stop`` (the
+        last point lands on it) or comes back past its start (after a fold).
+    step, min_step, max_step : float
+        First, smallest and largest arclength step, in scaled units (the parameter scaled
+        by its starting magnitude, each state component by its own, but by no less than a
+        tenth of the largest).
+    max_points : int
+        Most points on the branch.
+    tolerance : float
+        Corrector's convergence on the scaled Newton step.
+    progress : callable, optional
+        Called with each accepted orbit.
+
+    Returns
+    -------
+    Branch
+    """
+    if not (0 < min_step <= step <= max_step):
+        raise ParameterError(f"steps must satisfy 0 < min_step <= step <= max_step, got {min_step}, {step}, "
+                             f"{max_step}")
+    if max_points < 2:
+        raise ParameterError(f"max_points must be at least 2, got {max_points}")
+    lo, hi = sorted((start.parameter, float(stop)))
+    if not hi > lo:
+        raise ParameterError(f"stop must differ from the start {start.parameter}")
+    direction = 1.0 if stop > start.parameter else -1.0
+    x0 = np.abs(start.state)
+    scales = np.r_[np.maximum(x0, max(0.1 * x0.max(), 1e-12)), max(abs(start.parameter), 1e-12)]
+    job = _Continuation(problem, start.periods, scales, tolerance, max_corrections)
+    z0 = np.r_[start.state, start.parameter] / scales
+    seed = np.zeros(z0.size)
+    seed[-1] = direction
+    point = job.point(z0, seed, start.iterations)
+    point.orbit = start
+    branch = Branch([start], [], "")
+    if progress:
+        progress(start)
+    ds = step
+    while len(branch.orbits) < max_points:
+        last_step = False
+        target = point.z[-1] + ds * point.tangent[-1]
+        edge = hi if point.tangent[-1] > 0 else lo
+        if (target - edge / scales[-1]) * point.tangent[-1] > 0 and abs(point.tangent[-1]) > 1e-3:
+            ds = (edge / scales[-1] - point.z[-1]) / point.tangent[-1]
+            last_step = True
+        try:                                               # a failed run or a parameter out of bounds
+            if last_step:                                  # land on the edge: the parameter fixed there
+                axis = np.zeros(point.z.size)
+                axis[-1] = 1.0
+                new = job.correct(point.z + ds * point.tangent, axis, np.zeros(point.z.size), edge / scales[-1],
+                                  point.jacobian)
+                new.tangent = new.tangent if new.tangent @ point.tangent >= 0 else -new.tangent
+            else:
+                new = job.correct(point.z + ds * point.tangent, point.tangent, point.z, ds, point.jacobian)
+        except (SimulationError, ParameterError):
+            ds *= 0.5
+            if ds < min_step:
+                branch.bifurcations.extend(_grazing_end(branch.orbits))
+                return Branch(branch.orbits, branch.bifurcations,
+                              f"the step fell below {min_step:g} at {problem.name} = {point.orbit.parameter:.9g}")
+            continue
+        branch.bifurcations.extend(_detect(job, point, new))
+        branch.orbits.append(new.orbit)
+        if progress:
+            progress(new.orbit)
+        point = new
+        value = new.orbit.parameter
+        if last_step or not (lo - 1e-12 * scales[-1] <= value <= hi + 1e-12 * scales[-1]):
+            return Branch(branch.orbits, branch.bifurcations, f"{problem.name} reached the end of its range")
+        ds = min(ds * 1.5, max_step) if new.iterations <= 4 else max(ds * 0.7, min_step) if new.iterations > 8 else ds
+    return Branch(branch.orbits, branch.bifurcations, f"{max_points} points computed")

@@ -1,0 +1,272 @@
+"""Periodic orbits of forced hybrid systems by single shooting, and their Floquet
+multipliers.
+
+A period-``k`` orbit of a system forced with period ``T`` [s] is a state ``x`` at the
+phase ``t0`` with ``phi(t0 + kT; t0, x) = x``, where ``phi`` is the hybrid flow (smooth
+flow between events, resets and mode changes at them). Newton's method solves the
+residual ``F(x) = phi(t0 + kT; t0, x) - x`` with the Jacobian ``M - I``, where ``M`` is
+the monodromy matrix: the state-transition matrix over ``kT`` with the saltation matrix
+applied at every event (Leine & Nijmeijer 2004, *Dynamics and Bifurcations of
+Non-Smooth Mechanical Systems*, ch. 3 and 7; Seydel 2010, *Practical Bifurcation and
+Stability Analysis*, sec. 7.1-7.3). The eigenvalues of ``M`` are the orbit's Floquet
+multipliers: the orbit is asymptotically stable when all lie inside the unit circle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from camdyn.continuation.problem import Problem
+from camdyn.errors import ParameterError, SimulationError
+from camdyn.integrator import driver
+from camdyn.systems import registry as systems
+
+__all__ = ["Flow", "Orbit", "flow", "find_orbit", "make_orbit", "shoot", "transient_state", "STABILITY_MARGIN"]
+
+#: A multiplier counts as inside the unit circle when its modulus is below 1 - this [-].
+STABILITY_MARGIN = 1e-7
+#: Samples per forcing period of the orbit's guard, for its smallest value.
+SAMPLES_PER_PERIOD = 256
+
+
+@dataclass(frozen=True)
+class Flow:
+    """One shooting run over ``k`` forcing periods.
+
+    Attributes
+    ----------
+    end : ndarray (u,)
+        The unknown components of the state at the run's end.
+    matrix : ndarray (u, u)
+        Their derivative with respect to the unknown components at the start (the
+        monodromy matrix when the start lies on the orbit), saltation included.
+    impacts : int
+        Events on the contact guard (guard 0) that count as impacts.
+    events : int
+        Events of all kinds passed.
+    guard_minimum : float
+        Smallest sampled value of guard 0 over the run (the gap to the wall [m] of the
+        rigid-impact oscillator, the contact penetration [m] of the cam-follower).
+    states : ndarray (samples, n)
+        Sampled full states over the run, at ``times`` [s].
+    times : ndarray (samples,)
+        Sample times [s].
+    """
+
+    end: np.ndarray
+    matrix: np.ndarray
+    impacts: int
+    events: int
+    guard_minimum: float
+    states: np.ndarray
+    times: np.ndarray
+
+
+@dataclass(frozen=True)
+class Orbit:
+    """A periodic orbit and its stability.
+
+    Attributes
+    ----------
+    state : ndarray (u,)
+        The shooting unknowns at the phase ``t_start`` (the cam-follower's alpha [rad]
+        and alpha_dot [rad/s]; a test model's x [m] and x' [m/s]).
+    full_state : ndarray (n,)
+        The full initial state (quadratures from the problem's template).
+    parameter : float
+        The scalar parameter's value [its unit].
+    period : float
+        The orbit's period ``k T`` [s].
+    periods : int
+        ``k``: forcing periods per orbit period.
+    multipliers : ndarray (u,) complex
+        Floquet multipliers, by decreasing modulus.
+    stable : bool
+        True when every multiplier's modulus is below ``1 - STABILITY_MARGIN``.
+    impacts_per_period : int
+        Impacts (events of the contact guard) per orbit period.
+    iterations : int
+        Newton iterations used.
+    residual : float
+        Final residual's norm (units of the state).
+    guard_minimum : float
+        Smallest sampled value of the contact guard over the orbit.
+    monodromy : ndarray (u, u)
+        The monodromy matrix.
+    """
+
+    state: np.ndarray
+    full_state: np.ndarray
+    parameter: float
+    period: float
+    periods: int
+    multipliers: np.ndarray
+    stable: bool
+    impacts_per_period: int
+    iterations: int
+    residual: float
+    guard_minimum: float
+    monodromy: np.ndarray
+
+
+def _full(problem: Problem, x: np.ndarray) -> np.ndarray:
+    y = problem.template.copy()
+    y[:problem.unknowns] = x
+    return y
+
+
+def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samples: int = 0) -> Flow:
+    """Integrate the variational system from unknowns ``x`` at ``t_start`` over
+    ``periods`` forcing periods at the scalar parameter ``value`` (default the problem's).
+    Raises :class:`SimulationError` if the integrator stops."""
+    value = problem.value if value is None else float(value)
+    p, period = problem.build(value)
+    n = problem.template.size
+    u = problem.unknowns
+    y0 = _full(problem, np.asarray(x, dtype=float))
+    t0 = problem.t_start
+    t1 = t0 + periods * period
+    count = max(samples, 2)
+    times = np.linspace(t0, t1, count)
+    start = np.concatenate([y0, np.eye(n).ravel()])
+    y, _, log, counters = driver.integrate(systems.VARIATIONAL + problem.system_id, p, start, t0, t1, times,
+                                           problem.rtol, problem.atol, period / 32.0, driver.METHOD_DOP853,
+                                           50_000_000, 100_000, True)
+    status = int(counters[driver.COUNT_STATUS])
+    if status == driver.STATUS_INTERRUPTED:
+        raise KeyboardInterrupt
+    if status != driver.STATUS_OK:
+        raise SimulationError(f"shooting run at {problem.name} = {value:g} {driver.STATUS_MESSAGES[status]}")
+    on_contact = log[:, driver.EVENT_GUARD] == 0
+    if not problem.impacts:
+        on_contact &= False
+    elif problem.impact_sign != 0.0:
+        on_contact &= log[:, driver.EVENT_NEW_SIGN] == problem.impact_sign
+    states = y[:, :n]
+    matrix = y[-1, n:].reshape(n, n)[:u, :u].copy()
+    return Flow(y[-1, :u].copy(), matrix, int(on_contact.sum()), int(counters[driver.COUNT_EVENTS]),
+                _guard_minimum(problem.system_id, p, times, states) if samples else math.nan, states, times)
+
+
+def _guard_minimum(system_id: int, p: np.ndarray, times: np.ndarray, states: np.ndarray) -> float:
+    """Smallest value of guard 0 over the sampled states, refined by the parabola through
+    the smallest sample and its neighbours (error of order the sample spacing cubed)."""
+    m = systems.guard_count(system_id)
+    values, rates = np.empty(m), np.empty(m)
+    sampled = np.empty(times.size)
+    for i, (t, y) in enumerate(zip(times, states)):
+        systems.guards(system_id, float(t), y, y, False, p, values, rates)
+        sampled[i] = values[0]
+    i = int(np.argmin(sampled))
+    if 0 < i < sampled.size - 1:
+        left, middle, right = sampled[i - 1], sampled[i], sampled[i + 1]
+        curvature = left - 2.0 * middle + right
+        if curvature > 0:                                          # vertex of the parabola
+            return float(middle - (right - left) ** 2 / (8.0 * curvature))
+    return float(sampled[i])
+
+
+def shoot(problem: Problem, x, value: float, periods: int = 1) -> np.ndarray:
+    """The unknown components after ``periods`` forcing periods from unknowns ``x`` at
+    ``t_start``, by the plain model without its state-transition matrix (several times
+    cheaper: the matrix's error control takes the variational run's steps)."""
+    p, period = problem.build(float(value))
+    t0 = problem.t_start
+    t1 = t0 + periods * period
+    y, _, _, counters = driver.integrate(problem.system_id, p, _full(problem, np.asarray(x, dtype=float)), t0, t1,
+                                         np.array([t1]), problem.rtol, problem.atol, period / 32.0,
+                                         driver.METHOD_DOP853, 50_000_000, 100_000, True)
+    status = int(counters[driver.COUNT_STATUS])
+    if status == driver.STATUS_INTERRUPTED:
+        raise KeyboardInterrupt
+    if status != driver.STATUS_OK:
+        raise SimulationError(f"shooting run at {problem.name} = {value:g} {driver.STATUS_MESSAGES[status]}")
+    return y[-1, :problem.unknowns].copy()
+
+
+def transient_state(problem: Problem, periods: int = 50, value: float | None = None) -> np.ndarray:
+    """The unknown components after ``periods`` forcing periods of plain simulation from
+    the problem's template state at ``t_start``: a start for Newton's method on an
+    attracting orbit."""
+    if periods < 1:
+        raise ParameterError(f"periods must be at least 1, got {periods}")
+    value = problem.value if value is None else float(value)
+    p, period = problem.build(value)
+    t0 = problem.t_start
+    t1 = t0 + periods * period
+    y, _, _, counters = driver.integrate(problem.system_id, p, problem.template.copy(), t0, t1, np.array([t1]),
+                                         problem.rtol * 100, problem.atol * 100, period / 32.0,
+                                         driver.METHOD_DOP853, 50_000_000, 100_000, True)
+    status = int(counters[driver.COUNT_STATUS])
+    if status == driver.STATUS_INTERRUPTED:
+        raise KeyboardInterrupt
+    if status != driver.STATUS_OK:
+        raise SimulationError(f"transient run {driver.STATUS_MESSAGES[status]}")
+    return y[-1, :problem.unknowns].copy()
+
+
+def make_orbit(problem: Problem, x, value, periods, run: Flow, iterations, residual) -> Orbit:
+    """The :class:`Orbit` at unknowns ``x`` and parameter ``value`` from its run ``run``
+    over ``periods`` forcing periods (sampled, for the guard's minimum)."""
+    values = np.linalg.eigvals(run.matrix)
+    values = values[np.argsort(-np.abs(values), kind="stable")]
+    _, period = problem.build(value)
+    return Orbit(np.asarray(x, float).copy(), _full(problem, x), float(value), float(periods * period), periods, values,
+                 bool(np.all(np.abs(values) < 1.0 - STABILITY_MARGIN)), run.impacts, iterations, residual,
+                 run.guard_minimum, run.matrix)
+
+
+def find_orbit(problem: Problem, start=None, value: float | None = None, periods: int = 1, tolerance: float = 1e-10,
+               max_iterations: int = 30, transient: int = 50) -> Orbit:
+    """A period-``periods`` orbit by Newton's method on the shooting residual.
+
+    Parameters
+    ----------
+    problem : Problem
+        The system (:func:`~camdyn.continuation.problem.model_problem` or
+        :func:`~camdyn.continuation.problem.system_problem`).
+    start : array_like (u,), optional
+        First guess of the unknowns; default the state after ``transient`` forcing periods
+        of plain simulation from the problem's template.
+    value : float, optional
+        The scalar parameter (default the problem's).
+    periods : int
+        ``k``, forcing periods per orbit period.
+    tolerance : float
+        Convergence when the residual's norm is below ``tolerance (1 + |x|)`` (units of
+        the state).
+    max_iterations : int
+        Newton iterations before giving up with :class:`SimulationError`.
+
+    Returns
+    -------
+    Orbit
+    """
+    if int(periods) != periods or periods < 1:
+        raise ParameterError(f"periods must be a positive integer, got {periods!r}")
+    if not (tolerance > 0 and max_iterations >= 1):
+        raise ParameterError("tolerance must be positive and max_iterations at least 1")
+    value = problem.value if value is None else float(value)
+    if start is None:
+        x = transient_state(problem, transient, value)
+    else:
+        x = np.asarray(start, dtype=float).copy()
+        if x.size != problem.unknowns or not np.all(np.isfinite(x)):
+            raise ParameterError(f"start must be {problem.unknowns} finite numbers")
+    eye = np.eye(problem.unknowns)
+    residual = np.full(problem.unknowns, math.inf)
+    for iteration in range(max_iterations + 1):
+        run = flow(problem, x, value, periods, SAMPLES_PER_PERIOD * periods)
+        residual = run.end - x
+        if np.linalg.norm(residual) <= tolerance * (1.0 + np.linalg.norm(x)):
+            return make_orbit(problem, x, value, periods, run, iteration, float(np.linalg.norm(residual)))
+        if iteration < max_iterations:
+            x = x + np.linalg.lstsq(run.matrix - eye, -residual, rcond=None)[0]
+    unit = f" {problem.unit}" if problem.unit else ""
+    raise SimulationError(f"no period-{periods} orbit found at {problem.name} = {value:g}{unit}: Newton's "
+                          f"method did not converge in {max_iterations} iterations (last residual "
+                          f"{float(np.linalg.norm(residual)):.3g}); start closer (a longer transient) or change "
+                          f"the parameter")

@@ -1,0 +1,126 @@
+"""The cam-follower's branches of periodic orbits from a system and a parameter range,
+and their tables: one record per orbit (with the peak contact force and penetration over
+the orbit), the located bifurcations, and an xarray Dataset with units."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+import xarray as xr
+
+from camdyn.continuation.branches import Branch, continue_orbits
+from camdyn.continuation.orbits import Orbit, find_orbit
+from camdyn.continuation.problem import Problem, system_problem
+from camdyn.errors import ParameterError
+from camdyn.params.system import System
+
+__all__ = ["trace_branch", "orbit_record", "branch_records", "bifurcation_records", "branches_dataset"]
+
+
+def trace_branch(system: System, key: str, start: float, stop: float, periods: int = 1, step: float = 0.02,
+                 max_points: int = 200, transient: int = 50, rtol: float = 1e-10,
+                 progress: Callable[[Orbit], None] | None = None) -> tuple[Problem, Branch]:
+    """The branch of period-``periods`` orbits of ``system`` from the parameter ``key``
+    [SI unit] at ``start`` towards ``stop``: the orbit at ``start`` from a transient of
+    ``transient`` forcing periods and Newton's method, then pseudo-arclength continuation
+    (:func:`~camdyn.continuation.branches.continue_orbits`, steps in scaled units).
+
+    Raises
+    ------
+    ParameterError
+        For a bad key, range or setting, before any work.
+    SimulationError
+        If no orbit is found at ``start``.
+    """
+    if not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
+        raise ParameterError(f"the range must be two different finite values, got {start} and {stop}")
+    if int(periods) != periods or periods < 1:
+        raise ParameterError(f"the period must be a positive integer number of forcing periods, got {periods}")
+    if transient < 1 or max_points < 2 or not step > 0:
+        raise ParameterError("transient must be at least 1, max_points at least 2 and step positive")
+    problem = system_problem(system.with_values(**{key: start}), key, rtol=rtol, atol=rtol * 1e-2)
+    problem.build(stop)                                       # refuse an end value the system cannot take
+    orbit = find_orbit(problem, periods=int(periods), transient=transient)
+    branch = continue_orbits(problem, orbit, stop, step=step, max_step=max(step, 0.1), max_points=max_points,
+                             progress=progress)
+    return problem, branch
+
+
+def orbit_record(problem: Problem, orbit: Orbit) -> dict:
+    """One orbit as a record: ``parameter`` [SI], ``stable``, ``multipliers`` ([re, im]
+    pairs), ``period`` [s], ``impacts_per_period``, ``max_normal_force`` [N] and
+    ``max_penetration`` [m] over the orbit (from a simulation of one orbit period from
+    its state; NaN for a test model), ``state`` (the unknowns at the phase ``t_start``)."""
+    force = penetration = math.nan
+    if problem.system is not None:
+        from camdyn.simulation.runner import simulate
+        system = problem.system.with_values(**{problem.key: orbit.parameter})
+        ds = simulate(system, revolutions=orbit.periods, initial_state=orbit.state, rtol=problem.rtol,
+                      atol=problem.atol, sample_rate=512.0 / orbit.period * orbit.periods,
+                      variables=["Fn", "penetration"])
+        force, penetration = float(ds["Fn"].max()), float(ds["penetration"].max())
+    return {"parameter": orbit.parameter, "stable": orbit.stable,
+            "multipliers": [[float(m.real), float(m.imag)] for m in orbit.multipliers], "period": orbit.period,
+            "impacts_per_period": orbit.impacts_per_period, "max_normal_force": force,
+            "max_penetration": penetration, "state": [float(v) for v in orbit.state]}
+
+
+def branch_records(problem: Problem, branch: Branch) -> list[dict]:
+    """:func:`orbit_record` of every orbit of ``branch``."""
+    return [orbit_record(problem, orbit) for orbit in branch.orbits]
+
+
+def bifurcation_records(branches: list[Branch]) -> list[dict]:
+    """``{kind, parameter, branch}`` of every located bifurcation (``branch``: index into
+    ``branches``)."""
+    return [{"kind": b.kind, "parameter": b.parameter, "branch": index}
+            for index, branch in enumerate(branches) for b in branch.bifurcations]
+
+
+def branches_dataset(problem: Problem, records: list[list[dict]], bifurcations: list[dict]) -> xr.Dataset:
+    """The branches as a Dataset over ``point`` (all branches one after the other, with
+    their index in ``branch``), ``multiplier`` and ``bifurcation``; every variable carries
+    ``units`` and ``long_name``."""
+    points = [r for branch in records for r in branch]
+    if not points:
+        raise ParameterError("no orbit to store")
+    size = max(len(r["multipliers"]) for r in points)
+    mu = np.full((len(points), size), np.nan + 0j)
+    for i, r in enumerate(points):
+        mu[i, :len(r["multipliers"])] = [complex(a, b) for a, b in r["multipliers"]]
+    unit = problem.unit or "1"
+
+    def column(name, dtype=float):
+        return np.array([r[name] for r in points], dtype=dtype)
+
+    data = {
+        "parameter": ("point", column("parameter"), {"units": unit, "long_name": problem.name}),
+        "branch": ("point", np.array([i for i, b in enumerate(records) for _ in b], dtype=np.int32),
+                   {"units": "1", "long_name": "branch index"}),
+        "stable": ("point", column("stable", np.int8), {"units": "1", "long_name": "1 if every |multiplier| < 1"}),
+        "period": ("point", column("period"), {"units": "s", "long_name": "orbit period"}),
+        "impacts_per_period": ("point", column("impacts_per_period", np.int32),
+                               {"units": "1", "long_name": "impacts per orbit period"}),
+        "max_normal_force": ("point", column("max_normal_force"), {"units": "N", "long_name": "largest Fn"}),
+        "max_penetration": ("point", column("max_penetration"),
+                            {"units": "m", "long_name": "largest contact penetration"}),
+        "alpha": ("point", np.array([r["state"][0] for r in points]),
+                  {"units": "rad", "long_name": "follower angle at the orbit's phase"}),
+        "alpha_dot": ("point", np.array([r["state"][1] for r in points]),
+                      {"units": "rad/s", "long_name": "follower angular velocity at the orbit's phase"}),
+        "multiplier_real": (("point", "multiplier"), mu.real,
+                            {"units": "1", "long_name": "Floquet multiplier, real part"}),
+        "multiplier_imag": (("point", "multiplier"), mu.imag,
+                            {"units": "1", "long_name": "Floquet multiplier, imaginary part"}),
+        "bifurcation_kind": ("bifurcation", np.array([b["kind"] for b in bifurcations], dtype=str),
+                             {"units": "1", "long_name": "fold, period-doubling, neimark-sacker or grazing"}),
+        "bifurcation_parameter": ("bifurcation", np.array([b["parameter"] for b in bifurcations], dtype=float),
+                                  {"units": unit, "long_name": f"{problem.name} at the bifurcation"}),
+        "bifurcation_branch": ("bifurcation", np.array([b["branch"] for b in bifurcations], dtype=np.int32),
+                               {"units": "1", "long_name": "branch index"}),
+    }
+    return xr.Dataset(data, attrs={"parameter_name": problem.name, "parameter_units": unit,
+                                   "method": "single shooting, pseudo-arclength continuation",
+                                   "rtol": problem.rtol, "atol": problem.atol})
