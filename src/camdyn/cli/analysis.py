@@ -68,6 +68,9 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
              "metrics": {"names": ["regime", "impacts", "residual", "max_force"]},
              "output": {"path": str(out)}}
     spec = spec_from_dict(table, name=out.stem)
+    from camdyn.sweeps.execution import check_dask_address
+
+    check_dask_address(dask)   # before the compile notice: bad input is refused before any work
     notice_if_uncached(sweeps=True)
     ds = regime_map(spec, workers=workers, dask=dask, progress=not quiet, restart=restart,
                     echo=lambda msg: console.print(msg, markup=False, highlight=False, soft_wrap=True))

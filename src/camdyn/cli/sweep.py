@@ -43,6 +43,9 @@ def sweep(spec_path: Path = typer.Argument(..., metavar="SPEC.toml", help="Sweep
         spec = dataclasses.replace(spec, output=out)
     figure = None if no_plot else plot or spec.output.with_suffix(".png")
     check_outputs(netcdf=spec.output, figure=figure, force=force)
+    from camdyn.sweeps.execution import check_dask_address
+
+    check_dask_address(dask)   # before the compile notice: bad input is refused before any work
     notice_if_uncached(sweeps=True)
     ds = run_sweep(spec, workers=workers, dask=dask, threads=threads, progress=not quiet, restart=restart,
                    keep_parts=keep_parts, echo=_echo)
@@ -88,6 +91,9 @@ def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              "metrics": {"names": ["poincare", "impacts", "regime", "residual", "max_force"]},
              "output": {"path": str(out)}}
     spec = spec_from_dict(table, name=out.stem)
+    from camdyn.sweeps.execution import check_dask_address
+
+    check_dask_address(dask)   # before the compile notice: bad input is refused before any work
     notice_if_uncached(sweeps=True)
     ds = run_sweep(spec, workers=workers, dask=dask, progress=not quiet, restart=restart, echo=_echo)
     announce(out)
