@@ -209,9 +209,10 @@ def circular_arc_profile(arcs, base_radius, follower="flat", roller_radius=0.0):
         if not all(math.isfinite(v) for v in values) or span <= 0.0 or d < 0.0 or rho <= 0.0:
             raise ParameterError(f"arc {values}: the span and radius must be positive, the centre distance >= 0")
         radius = rho + roller_radius
-        if form == laws.ARC_RAY and d > radius:
-            raise GeometryError(f"the arc of radius {rho} m centred {d} m from the axis does not surround it: "
-                                "an in-line follower's line misses part of it")
+        phi = np.linspace(theta, theta + span, 257) - phi_c
+        if form == laws.ARC_RAY and np.min(radius ** 2 - (d * np.sin(phi)) ** 2) < 0.0:
+            raise GeometryError(f"the follower's line misses the arc of radius {rho} m centred {d} m from the "
+                                f"axis between {math.degrees(theta):.3f} and {math.degrees(theta + span):.3f} deg")
         rows.append((laws.ARC, theta, span, d, phi_c, radius, form, base_radius + roller_radius))
         theta += span
     if abs(theta - TWO_PI) > 1e-9:

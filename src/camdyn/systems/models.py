@@ -23,7 +23,9 @@ linear oscillator with a closed-form solution, and system 2 the same oscillator 
 a rigid wall with Newton's restitution (:mod:`camdyn.model.impact_oscillator`), whose
 impacts reset the state in :func:`transition`; system 3 is two coupled oscillators, the
 second against a wall (:mod:`camdyn.model.coupled_oscillator`, 4 states, 1 guard). The
-three test the integrator.
+three test the integrator. System 4 is a translating follower on a cam of any profile,
+with rigid (Newton restitution, sustained contact) or compliant contact
+(:mod:`camdyn.model.translating_follower`, 2 states, 2 guards).
 
 A new model gets an id here and a branch in each function; this module is the only one
 that imports the models.
@@ -37,12 +39,14 @@ import numba
 import numpy as np
 
 from camdyn.model import coupled_oscillator, dynamics, impact_oscillator
+from camdyn.model import translating_follower as translating
 from camdyn.model import layout as L
 
 CAM_FOLLOWER = 0
 OSCILLATOR = 1
 RIGID_IMPACT = 2
 COUPLED_OSCILLATORS = 3
+TRANSLATING_FOLLOWER = 4
 
 
 @numba.njit(cache=True)
@@ -50,6 +54,8 @@ def state_size(system):
     """Number of state components."""
     if system == COUPLED_OSCILLATORS:
         return coupled_oscillator.STATE_SIZE
+    if system == TRANSLATING_FOLLOWER:
+        return translating.STATE_SIZE
     return 3
 
 
@@ -59,6 +65,8 @@ def controlled_size(system):
     the oscillators' third component is a quadrature that feeds back into nothing."""
     if system == COUPLED_OSCILLATORS:
         return coupled_oscillator.STATE_SIZE
+    if system == TRANSLATING_FOLLOWER:
+        return translating.STATE_SIZE
     return 2
 
 
@@ -67,6 +75,8 @@ def guard_count(system):
     """Number of guard functions."""
     if system == CAM_FOLLOWER:
         return 3
+    if system == TRANSLATING_FOLLOWER:
+        return translating.GUARD_COUNT
     return 1
 
 
@@ -92,6 +102,8 @@ def rhs(system, t, y, mode, p, dydt):
         dynamics.rhs(t, y, mode, p, dydt)
     elif system == COUPLED_OSCILLATORS:
         coupled_oscillator.rhs(t, y, p, dydt)
+    elif system == TRANSLATING_FOLLOWER:
+        translating.rhs(t, y, mode, p, dydt)
     else:
         _osc_rhs(t, y, p, dydt)
 
@@ -106,6 +118,8 @@ def rhs_inline(system, t, y, mode, p, dydt):
         dynamics.rhs(t, y, mode, p, dydt)
     elif system == COUPLED_OSCILLATORS:
         coupled_oscillator.rhs(t, y, p, dydt)
+    elif system == TRANSLATING_FOLLOWER:
+        translating.rhs(t, y, mode, p, dydt)
     else:
         _osc_rhs(t, y, p, dydt)
 
@@ -115,6 +129,9 @@ def jacobian(system, t, y, f0, mode, p, jac):
     """The Jacobian ``jac = d f / d y`` (n x n) at ``(t, y)``, where ``f0 = f(t, y)``."""
     if system == COUPLED_OSCILLATORS:
         coupled_oscillator.jacobian(p, jac)
+        return
+    if system == TRANSLATING_FOLLOWER:
+        translating.jacobian(t, y, mode, p, jac)
         return
     jac[:, :] = 0.0
     jac[0, 1] = 1.0   # second-order systems in first-order form; the quadrature's column is zero
@@ -135,6 +152,8 @@ def guards(system, t, y, f, known, p, values, rates):
         impact_oscillator.guards(t, y, p, values, rates)
     elif system == COUPLED_OSCILLATORS:
         coupled_oscillator.guards(t, y, p, values, rates)
+    elif system == TRANSLATING_FOLLOWER:
+        translating.guards(t, y, p, values, rates)
     else:
         values[0] = y[0]
         rates[0] = y[1]
@@ -157,6 +176,8 @@ def expected_sign(system, k, mode, p):
         return 0.0
     if system == RIGID_IMPACT or system == COUPLED_OSCILLATORS:
         return 1.0   # the gap to the wall stays positive in flight
+    if system == TRANSLATING_FOLLOWER:
+        return translating.expected_sign(k, mode, p)
     if k == 0:
         return mode[0]
     return 0.0
@@ -187,6 +208,8 @@ def transition(system, k, t, y, values, mode, p):
         impact_oscillator.reset(y, p)   # the state jumps; the mode stays
     elif system == COUPLED_OSCILLATORS:
         coupled_oscillator.reset(y, p)
+    elif system == TRANSLATING_FOLLOWER:
+        translating.transition(k, t, y, mode, p)
     else:
         mode[0] = -mode[0]
 
@@ -202,6 +225,8 @@ def initial_mode(system, t, y, p, mode):
         mode[L.MODE_COMPRESSING] = 1.0 if values[2] > 0.0 else 0.0
         mode[L.MODE_APPROACH] = p[L.V_REFERENCE]
         mode[L.MODE_IMPACT] = 0.0
+    elif system == TRANSLATING_FOLLOWER:
+        translating.initial_mode(t, y, p, mode)
     else:
         mode[0] = 1.0 if values[0] >= 0.0 else -1.0
 
@@ -212,6 +237,8 @@ def regime(system, mode, p):
     size of each regime, so that a step after an event starts at the right scale."""
     if system == CAM_FOLLOWER:
         return 1 if mode[L.MODE_CONTACT] > 0.5 else 0
+    if system == TRANSLATING_FOLLOWER:
+        return 1 if mode[0] > 0.5 else 0
     return 0
 
 
@@ -224,7 +251,7 @@ def preferred_method(system, mode, p):
         # more steps than the explicit methods at equal accuracy, and impacts are not
         # stiff; DOP853 needs the fewest right-hand-side calls in both regimes.
         return 3
-    if system == RIGID_IMPACT or system == COUPLED_OSCILLATORS:
+    if system == RIGID_IMPACT or system == COUPLED_OSCILLATORS or system == TRANSLATING_FOLLOWER:
         return 3
     return 2 if p[4] > 0.5 else 1
 
@@ -237,4 +264,6 @@ def monitor(system, t, y, mode, p):
         if mode[L.MODE_CONTACT] > 0.5 and mode[L.MODE_IMPACT] > 0.5:
             return dynamics.evaluate(t, y[0], y[1], mode, p)[1]
         return 0.0
+    if system == TRANSLATING_FOLLOWER:
+        return translating.contact_force(t, y, mode, p)   # the largest force of a contact
     return abs(y[0])
