@@ -39,8 +39,8 @@ import numba
 import numpy as np
 
 from camdyn.model import coupled_oscillator, dynamics, impact_oscillator
-from camdyn.model import translating_follower as translating
 from camdyn.model import layout as L
+from camdyn.model import translating_follower as translating
 
 CAM_FOLLOWER = 0
 OSCILLATOR = 1

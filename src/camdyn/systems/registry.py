@@ -18,8 +18,8 @@ from camdyn.systems import models, variational
 from camdyn.systems.models import CAM_FOLLOWER, COUPLED_OSCILLATORS, OSCILLATOR, RIGID_IMPACT, TRANSLATING_FOLLOWER
 from camdyn.systems.variational import VARIATIONAL
 
-__all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", "TRANSLATING_FOLLOWER", "VARIATIONAL", "state_size",
-           "controlled_size", "guard_count", "mode_size", "rhs", "rhs_inline", "jacobian", "guards",
+__all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", "TRANSLATING_FOLLOWER", "VARIATIONAL",
+           "state_size", "controlled_size", "guard_count", "mode_size", "rhs", "rhs_inline", "jacobian", "guards",
            "expected_sign", "transition", "initial_mode", "regime", "preferred_method", "monitor"]
 
 
