@@ -76,6 +76,16 @@ def cam(t, p):
 
 
 @numba.njit(cache=True)
+def follower_state(t, y, mode, p):
+    """The follower's position [m] and velocity [m/s]: the state, or in rigid contact the
+    cam's lift and lift rate (which the state follows to the integration's accuracy)."""
+    if p[LAW] == RIGID and mode[0] > 0.5:
+        _, s, sd, _, _ = cam(t, p)
+        return s, sd
+    return y[0], y[1]
+
+
+@numba.njit(cache=True)
 def spring_force(x, v, p):
     """Force of spring, damper and gravity on the follower along ``-x`` [N] (eq. 1)."""
     return p[PRELOAD] + p[STIFFNESS] * x + p[DAMPING] * v + p[MASS] * p[GRAVITY]
@@ -95,10 +105,15 @@ def contact_force(t, y, mode, p):
 
 @numba.njit(cache=True)
 def rhs(t, y, mode, p, dydt):
-    """Eq. (1), plus the penalty in compliant contact; in rigid contact the follower moves
-    with the cam."""
+    """Eq. (1), plus the penalty in compliant contact. In rigid contact the follower moves
+    with the cam, ``x' = s_dot``, ``x'' = s_ddot`` (the outputs take the cam's state itself,
+    :func:`follower_state`). The integration in contact also makes the step control see
+    the joints of the profile, where ``s''`` and so the contact force jump: a step across
+    a joint is shortened, so that a contact force dipping below zero just after a joint
+    is not stepped over. (At tolerances below about rtol 1e-12 the jumps of ``s''`` of a
+    circular-arc cam can then shrink the step below the resolution of time.)"""
     if p[LAW] == RIGID and mode[0] > 0.5:
-        _, s, sd, sdd, _ = cam(t, p)
+        _, _, sd, sdd, _ = cam(t, p)
         dydt[0] = sd
         dydt[1] = sdd
         return

@@ -219,6 +219,9 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
         if y0.shape != (2,) or not np.all(np.isfinite(y0)):
             raise ParameterError(f"initial_state must be two finite numbers (x [m], x_dot [m/s]), "
                                  f"got {initial_state!r}")
+        if y0[0] < model.cam(0.0, p)[1] - 1e-12 * max(1.0, abs(y0[0])) and follower.contact == "rigid":
+            raise ParameterError(f"the follower starts inside the cam (x = {y0[0]} m below the lift "
+                                 f"{model.cam(0.0, p)[1]} m); a rigid contact allows no penetration")
     if max_step is None:
         max_step = period / 64.0
     if max_events is None:
@@ -262,8 +265,10 @@ def _event_table(events, p):
 def _dataset(follower, p, t, y, modes, events, counters, elapsed, speed, phase, rtol, atol):
     lift = np.empty((t.size, 4))
     force = np.empty(t.size)
+    y = y.copy()
     for i, ti in enumerate(t):
         lift[i] = model.cam(ti, p)[1:]
+        y[i] = model.follower_state(ti, y[i], modes[i], p)
         force[i] = model.contact_force(ti, y[i], modes[i], p)
     kinds, velocities = _event_table(events, p)
     data = {
