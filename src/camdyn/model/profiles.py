@@ -234,8 +234,8 @@ def eccentric_circle(radius, eccentricity, follower="flat", roller_radius=0.0):
 
 
 def tabulated_profile(lift, base_radius, follower="flat", roller_radius=0.0, offset=0.0):
-    """A profile through lift samples at equally spaced cam angles ``2 pi i / n`` (``i = 0
-    .. n-1``): a periodic cubic spline (SciPy's ``CubicSpline(bc_type="periodic")``), so
+    """A profile through lift samples at equally spaced cam angles ``2 pi i / n``, ``i``
+    from 0 to ``n - 1``: a periodic cubic spline (SciPy's ``CubicSpline(bc_type="periodic")``), so
     ``s``, ``s'`` and ``s''`` are continuous and ``s'''`` is constant per interval.
 
     Parameters
