@@ -4,6 +4,7 @@ solve_ivp, impacts by Newton's law, sustained contact until the contact force va
 the lift-off speed against its closed form, the compliant contact's rigid limit, the
 variational system, and refusals."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -253,3 +254,17 @@ def test_bad_runs_are_refused_before_any_work():
                           ({"speed": 10.0, "duration": 1.0, "initial_state": (0.0,)}, "initial_state")):
         with pytest.raises(ParameterError, match=match):
             simulate_translating(rig, **kwargs)
+
+
+def test_with_damping_the_liftoff_speed_brackets_the_first_separation():
+    """The damper's force c omega s' enters the contact force: lift-off is the smallest
+    root of a quadratic in omega. Simulations 0.5 % either side of it stay on the cam and
+    leave it."""
+    rig = dataclasses.replace(alzate_rig(), damping=5.0)
+    w_lift = liftoff_speed(rig)
+    assert w_lift < liftoff_speed(alzate_rig())   # the damper pulls back on the rise's end
+    revolution = 2 * math.pi / w_lift
+    below = simulate_translating(rig, 0.995 * w_lift, 3 * revolution, sample_rate=500 / revolution, phase=PHASE)
+    assert below.event_time.size == 0 and below.in_contact.values.all()
+    above = simulate_translating(rig, 1.005 * w_lift, 1.2 * revolution, sample_rate=500 / revolution, phase=PHASE)
+    assert above.event_kind.values[0] == "separation"

@@ -144,17 +144,27 @@ def alzate_rig(contact="rigid", contact_stiffness=0.0, contact_damping=0.0):
 
 def liftoff_speed(follower, samples=200_000):
     """The lowest cam speed [rad/s] at which a follower held on the cam would need a pull:
-    where ``m omega^2 s'' + F0 + k s + m g`` (the contact force, damping left out) first
-    reaches zero, ``omega^2 = min over s'' < 0 of (F0 + k s + m g) / (-m s'')``; infinite
-    for a cam with no deceleration. Evaluated on ``samples`` angles and at the joints."""
+    the smallest positive root over the cam angles of the contact force (eq. 3 of
+    :mod:`camdyn.model.translating_follower`), ``m s'' omega^2 + c s' omega + F0 + k s +
+    m g = 0``; without damping ``omega^2 = min over s'' < 0 of (F0 + k s + m g) / (-m
+    s'')``. Infinite for a cam that never needs a pull. Evaluated on ``samples`` angles and
+    at both sides of every joint."""
     theta = np.unique(np.r_[np.linspace(0.0, 2.0 * math.pi, samples, endpoint=False),
                             follower.profile.joints, follower.profile.joints - 1e-12])
-    s, _, s2, _ = follower.profile.lift(theta)
-    hold = follower.preload + follower.stiffness * s + follower.mass * follower.gravity
-    pulling = s2 < 0.0
-    if not np.any(pulling):
-        return math.inf
-    return float(math.sqrt(np.min(hold[pulling] / (-follower.mass * s2[pulling]))))
+    s, s1, s2, _ = follower.profile.lift(theta)
+    a = follower.mass * s2
+    b = follower.damping * s1
+    c = follower.preload + follower.stiffness * s + follower.mass * follower.gravity
+    if np.any(c <= 0.0):
+        return 0.0   # the spring does not even hold the follower at rest
+    with np.errstate(invalid="ignore", divide="ignore"):
+        # a < 0 < c: one positive root, (-b - sqrt(b^2 - 4 a c)) / (2 a)
+        roots = np.where(a < 0.0, (-b - np.sqrt(b * b - 4.0 * a * c)) / (2.0 * a), np.inf)
+        # a >= 0 and b < 0: a positive root only where b^2 >= 4 a c, the smaller one
+        both = (a > 0.0) & (b < 0.0) & (b * b >= 4.0 * a * c)
+        roots = np.where(both, (-b - np.sqrt(b * b - 4.0 * a * c)) / (2.0 * a), roots)
+        roots = np.where((a == 0.0) & (b < 0.0), -c / b, roots)
+    return float(np.min(roots))
 
 
 def _check_run(speed, duration, sample_rate, rtol, atol):
@@ -206,7 +216,8 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
     if not isinstance(follower, TranslatingFollower):
         raise ParameterError(f"expected a TranslatingFollower, got {type(follower).__name__}")
     _check_run(speed, duration, sample_rate, rtol, atol)
-    limits.check_number("phase", phase, "rad")
+    if not math.isfinite(limits.check_number("phase", phase, "rad")):
+        raise ParameterError(f"phase must be finite, got {phase!r} rad")
     period = 2.0 * math.pi / speed
     n_out = limits.check_sampling(sample_rate, period, duration)
     limits.check_memory(limits.result_bytes(n_out, 8), "the simulation's result")
