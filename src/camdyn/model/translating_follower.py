@@ -63,6 +63,7 @@ RIGID = 0.0
 COMPLIANT = 1.0
 STATE_SIZE = 2
 GUARD_COUNT = 2
+MODE_SIZE = 1
 
 
 @numba.njit(cache=True)

@@ -85,6 +85,8 @@ def mode_size(system):
     """Number of slots of the mode vector."""
     if system == CAM_FOLLOWER:
         return L.MODE_SIZE
+    if system == TRANSLATING_FOLLOWER:
+        return translating.MODE_SIZE
     return 1
 
 
