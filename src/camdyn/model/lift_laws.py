@@ -5,8 +5,8 @@ A segment starts at cam angle ``theta_start`` [rad] and spans ``span`` [rad]; in
 ``u = (theta - theta_start) / span`` runs from 0 to 1. The rise and return laws are
 ``s = s0 + L f(u)`` with the lift ``L`` [m] (negative for a return) and the standard
 normalised forms of cam design (R. L. Norton, *Cam Design and Manufacturing Handbook*,
-2nd ed., Industrial Press 2009, ch. 3; H. A. Rothbart, *Cam Design Handbook*,
-McGraw-Hill 2004, ch. 2):
+2nd ed., Industrial Press 2009; H. A. Rothbart, *Cam Design Handbook*,
+McGraw-Hill 2004):
 
 - cycloidal:        ``f = u - sin(2 pi u) / (2 pi)``
 - simple harmonic:  ``f = (1 - cos(pi u)) / 2``
@@ -18,7 +18,7 @@ angle ``phi_c`` [rad] in the cam's frame, radius ``rho`` [m]) gives, with
 ``phi = theta - phi_c``,
 
 - for a flat-faced translating follower, the support function of the circle,
-  ``h = d cos(phi) + rho`` (Rothbart 2004, sec. 5.2: the follower face is tangent to the
+  ``h = d cos(phi) + rho`` (Rothbart 2004: the follower face is tangent to the
   arc);
 - for a knife-edge in-line follower (or a roller's centre, with ``rho`` the arc's radius
   plus the roller's), the distance from the axis to the circle along the follower's line,

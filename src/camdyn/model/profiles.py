@@ -12,11 +12,11 @@ Followers (the lift is that of the follower's reference point):
 
 - ``"flat"``: a flat face normal to the follower's line. The cam is recovered from the
   lift through its support function ``h = r_base + s`` and its radius of curvature
-  ``rho = h + h''`` (Rothbart 2004, sec. 5.2), which must be positive: the cam convex.
+  ``rho = h + h''`` (Rothbart 2004), which must be positive: the cam convex.
 - ``"knife"``: a knife edge; the contact point is the pitch point.
 - ``"roller"``: a roller of radius ``r_r`` whose centre describes the pitch curve; the cam
   is the pitch curve's inner offset by ``r_r``, undercut where the pitch curve's radius of
-  curvature is positive but below ``r_r`` (Norton 2009, sec. 7.6).
+  curvature is positive but below ``r_r`` (Norton 2009).
 
 References: R. L. Norton, *Cam Design and Manufacturing Handbook*, 2nd ed., Industrial
 Press 2009; H. A. Rothbart, *Cam Design Handbook*, McGraw-Hill 2004.
@@ -330,7 +330,7 @@ def check_profile(profile):
 
 def pressure_angle(profile, theta):
     """Pressure angle [rad] of a knife-edge or roller follower at the cam angles ``theta``
-    [rad]: ``tan(phi) = (s' - eps) / (sqrt(Rp^2 - eps^2) + s)`` (Norton 2009, sec. 7.3),
+    [rad]: ``tan(phi) = (s' - eps) / (sqrt(Rp^2 - eps^2) + s)`` (Norton 2009),
     with ``Rp`` the prime circle radius and ``eps`` the offset; 0 for a flat face, whose
     contact force stays along its line."""
     s, s1, _, _ = profile.lift(theta)

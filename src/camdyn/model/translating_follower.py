@@ -3,8 +3,8 @@ a preloaded spring, pushed by the cam, free to leave it and to land on it again.
 
 The follower's position ``x`` [m] is measured along its line from where it rests on the
 base circle, as the lift ``s`` is; the cam turns at constant speed, ``theta = theta0 +
-omega t``. In free flight (equation of motion of a spring-loaded follower, Norton 2009,
-ch. 10)::
+omega t``. In free flight (the single-degree-of-freedom model of a spring-loaded
+follower, as in R. L. Norton, *Cam Design and Manufacturing Handbook*, 2009)::
 
     m x'' = -F0 - k x - c x' - m g                                             (1)
 
