@@ -111,8 +111,9 @@ def rhs(t, y, mode, p, dydt):
     :func:`follower_state`). The integration in contact also makes the step control see
     the joints of the profile, where ``s''`` and so the contact force jump: a step across
     a joint is shortened, so that a contact force dipping below zero just after a joint
-    is not stepped over. (At tolerances below about rtol 1e-12 the jumps of ``s''`` of a
-    circular-arc cam can then shrink the step below the resolution of time.)"""
+    is not stepped over. (At rtol 1e-12 or tighter the jumps of ``s''`` of a simple
+    harmonic or circular-arc cam can then shrink the step below the resolution of
+    time.)"""
     if p[LAW] == RIGID and mode[0] > 0.5:
         _, _, sd, sdd, _ = cam(t, p)
         dydt[0] = sd
