@@ -23,11 +23,14 @@ linear oscillator with a closed-form solution, and system 2 the same oscillator 
 a rigid wall with Newton's restitution (:mod:`camdyn.model.impact_oscillator`), whose
 impacts reset the state in :func:`transition`; system 3 is two coupled oscillators, the
 second against a wall (:mod:`camdyn.model.coupled_oscillator`, 4 states, 1 guard). The
-three test the integrator. The mechanisms, ids 5 and up, sit in one block at the end of
-this module, each function here sending them there in its first lines: system 5 is the
-stick-slip oscillator (:mod:`camdyn.model.stick_slip`, 3 states, 3 guards) and system 6
-the cam-follower with the cam as a rigid body on a driven shaft
-(:mod:`camdyn.model.driven_cam`, 8 states, the cam-follower's 3 guards and modes).
+three test the integrator. System 4 is a translating follower on a cam of any profile,
+with rigid (Newton restitution, sustained contact) or compliant contact
+(:mod:`camdyn.model.translating_follower`, 2 states, 2 guards). The mechanisms, ids 5
+and up, sit in one block at the end of this module, each function here sending them
+there in its first lines: system 5 is the stick-slip oscillator
+(:mod:`camdyn.model.stick_slip`, 3 states, 3 guards) and system 6 the cam-follower with
+the cam as a rigid body on a driven shaft (:mod:`camdyn.model.driven_cam`, 8 states, the
+cam-follower's 3 guards and modes).
 
 A new model gets an id here and a branch in each function; this module is the only one
 that imports the models.
@@ -42,11 +45,13 @@ import numpy as np
 
 from camdyn.model import coupled_oscillator, driven_cam, dynamics, impact_oscillator, stick_slip
 from camdyn.model import layout as L
+from camdyn.model import translating_follower as translating
 
 CAM_FOLLOWER = 0
 OSCILLATOR = 1
 RIGID_IMPACT = 2
 COUPLED_OSCILLATORS = 3
+TRANSLATING_FOLLOWER = 4
 # --- mechanisms (ids 5 and up; their branches are the blocks marked "mechanisms" below)
 STICK_SLIP = 5
 
@@ -58,6 +63,8 @@ def state_size(system):
         return _mechanism_sizes(system)[0]
     if system == COUPLED_OSCILLATORS:
         return coupled_oscillator.STATE_SIZE
+    if system == TRANSLATING_FOLLOWER:
+        return translating.STATE_SIZE
     return 3
 
 
@@ -69,6 +76,8 @@ def controlled_size(system):
         return _mechanism_sizes(system)[1]
     if system == COUPLED_OSCILLATORS:
         return coupled_oscillator.STATE_SIZE
+    if system == TRANSLATING_FOLLOWER:
+        return translating.STATE_SIZE
     return 2
 
 
@@ -79,6 +88,8 @@ def guard_count(system):
         return _mechanism_sizes(system)[2]
     if system == CAM_FOLLOWER:
         return 3
+    if system == TRANSLATING_FOLLOWER:
+        return translating.GUARD_COUNT
     return 1
 
 
@@ -89,6 +100,8 @@ def mode_size(system):
         return _mechanism_sizes(system)[3]
     if system == CAM_FOLLOWER:
         return L.MODE_SIZE
+    if system == TRANSLATING_FOLLOWER:
+        return translating.MODE_SIZE
     return 1
 
 
@@ -109,6 +122,8 @@ def rhs(system, t, y, mode, p, dydt):
         dynamics.rhs(t, y, mode, p, dydt)
     elif system == COUPLED_OSCILLATORS:
         coupled_oscillator.rhs(t, y, p, dydt)
+    elif system == TRANSLATING_FOLLOWER:
+        translating.rhs(t, y, mode, p, dydt)
     else:
         _osc_rhs(t, y, p, dydt)
 
@@ -126,6 +141,8 @@ def rhs_inline(system, t, y, mode, p, dydt):
         dynamics.rhs(t, y, mode, p, dydt)
     elif system == COUPLED_OSCILLATORS:
         coupled_oscillator.rhs(t, y, p, dydt)
+    elif system == TRANSLATING_FOLLOWER:
+        translating.rhs(t, y, mode, p, dydt)
     else:
         _osc_rhs(t, y, p, dydt)
 
@@ -138,6 +155,9 @@ def jacobian(system, t, y, f0, mode, p, jac):
         return
     if system == COUPLED_OSCILLATORS:
         coupled_oscillator.jacobian(p, jac)
+        return
+    if system == TRANSLATING_FOLLOWER:
+        translating.jacobian(t, y, mode, p, jac)
         return
     jac[:, :] = 0.0
     jac[0, 1] = 1.0   # second-order systems in first-order form; the quadrature's column is zero
@@ -161,6 +181,8 @@ def guards(system, t, y, f, known, p, values, rates):
         impact_oscillator.guards(t, y, p, values, rates)
     elif system == COUPLED_OSCILLATORS:
         coupled_oscillator.guards(t, y, p, values, rates)
+    elif system == TRANSLATING_FOLLOWER:
+        translating.guards(t, y, p, values, rates)
     else:
         values[0] = y[0]
         rates[0] = y[1]
@@ -185,6 +207,8 @@ def expected_sign(system, k, mode, p):
         return 0.0
     if system == RIGID_IMPACT or system == COUPLED_OSCILLATORS:
         return 1.0   # the gap to the wall stays positive in flight
+    if system == TRANSLATING_FOLLOWER:
+        return translating.expected_sign(k, mode, p)
     if k == 0:
         return mode[0]
     return 0.0
@@ -218,6 +242,8 @@ def transition(system, k, t, y, values, mode, p):
         impact_oscillator.reset(y, p)   # the state jumps; the mode stays
     elif system == COUPLED_OSCILLATORS:
         coupled_oscillator.reset(y, p)
+    elif system == TRANSLATING_FOLLOWER:
+        translating.transition(k, t, y, mode, p)
     else:
         mode[0] = -mode[0]
 
@@ -236,6 +262,8 @@ def initial_mode(system, t, y, p, mode):
         mode[L.MODE_COMPRESSING] = 1.0 if values[2] > 0.0 else 0.0
         mode[L.MODE_APPROACH] = p[L.V_REFERENCE]
         mode[L.MODE_IMPACT] = 0.0
+    elif system == TRANSLATING_FOLLOWER:
+        translating.initial_mode(t, y, p, mode)
     else:
         mode[0] = 1.0 if values[0] >= 0.0 else -1.0
 
@@ -248,6 +276,8 @@ def regime(system, mode, p):
         return _mechanism_regime(system, mode, p)
     if system == CAM_FOLLOWER:
         return 1 if mode[L.MODE_CONTACT] > 0.5 else 0
+    if system == TRANSLATING_FOLLOWER:
+        return 1 if mode[0] > 0.5 else 0
     return 0
 
 
@@ -262,7 +292,7 @@ def preferred_method(system, mode, p):
         # more steps than the explicit methods at equal accuracy, and impacts are not
         # stiff; DOP853 needs the fewest right-hand-side calls in both regimes.
         return 3
-    if system == RIGID_IMPACT or system == COUPLED_OSCILLATORS:
+    if system == RIGID_IMPACT or system == COUPLED_OSCILLATORS or system == TRANSLATING_FOLLOWER:
         return 3
     return 2 if p[4] > 0.5 else 1
 
@@ -277,6 +307,8 @@ def monitor(system, t, y, mode, p):
         if mode[L.MODE_CONTACT] > 0.5 and mode[L.MODE_IMPACT] > 0.5:
             return dynamics.evaluate(t, y[0], y[1], mode, p)[1]
         return 0.0
+    if system == TRANSLATING_FOLLOWER:
+        return translating.contact_force(t, y, mode, p)   # the largest force of a contact
     return abs(y[0])
 
 

@@ -15,12 +15,20 @@ from __future__ import annotations
 import numba
 
 from camdyn.systems import models, variational
-from camdyn.systems.models import CAM_FOLLOWER, COUPLED_OSCILLATORS, DRIVEN_CAM, OSCILLATOR, RIGID_IMPACT, STICK_SLIP
+from camdyn.systems.models import (
+    CAM_FOLLOWER,
+    COUPLED_OSCILLATORS,
+    DRIVEN_CAM,
+    OSCILLATOR,
+    RIGID_IMPACT,
+    STICK_SLIP,
+    TRANSLATING_FOLLOWER,
+)
 from camdyn.systems.variational import VARIATIONAL
 
-__all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", "STICK_SLIP", "DRIVEN_CAM",
-           "VARIATIONAL", "state_size",
-           "controlled_size", "guard_count", "mode_size", "rhs", "rhs_inline", "jacobian", "guards",
+__all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", "TRANSLATING_FOLLOWER", "STICK_SLIP",
+           "DRIVEN_CAM", "VARIATIONAL", "state_size", "controlled_size", "guard_count", "mode_size", "rhs",
+           "rhs_inline", "jacobian", "guards",
            "expected_sign", "transition", "initial_mode", "regime", "preferred_method", "monitor"]
 
 

@@ -1,0 +1,312 @@
+"""Simulation of a translating follower on a cam profile (:mod:`camdyn.model.translating_follower`):
+the parameters, the run through the compiled driver, and the result as an xarray Dataset.
+
+This model is not part of the :class:`~camdyn.params.system.System` and TOML machinery
+(which describes the rocking follower); its parameters are the frozen dataclass
+:class:`TranslatingFollower`, and :func:`alzate_rig` is its one preset.
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+from dataclasses import dataclass, field
+
+import numpy as np
+import xarray as xr
+
+from camdyn.errors import ParameterError, SimulationError
+from camdyn.integrator import driver
+from camdyn.model import translating_follower as model
+from camdyn.model.profiles import Profile, circular_arc_profile
+from camdyn.simulation import limits
+from camdyn.systems import registry as systems
+
+__all__ = ["TranslatingFollower", "simulate_translating", "alzate_rig", "liftoff_speed", "CONTACT_LAWS"]
+
+CONTACT_LAWS = {"rigid": model.RIGID, "compliant": model.COMPLIANT}
+
+
+@dataclass(frozen=True)
+class TranslatingFollower:
+    """A spring-loaded translating follower on a cam, validated when built.
+
+    Attributes
+    ----------
+    profile : Profile
+        The cam's lift law (:mod:`camdyn.model.profiles`).
+    mass : float
+        Follower mass m [kg].
+    stiffness : float
+        Spring stiffness k [N/m].
+    preload : float
+        Spring force F0 [N] when the follower rests on the base circle.
+    damping : float
+        Viscous damping c [N s/m].
+    gravity : float
+        Gravity g [m/s^2] along the follower's line, towards the cam (0: none).
+    contact : str
+        ``"rigid"`` (Newton restitution, sustained contact) or ``"compliant"`` (linear
+        spring-dashpot penalty).
+    restitution : float
+        Newton's coefficient of restitution e [-] (rigid).
+    capture_velocity : float
+        Impacts slower than this [m/s] end in sustained contact (rigid).
+    contact_stiffness, contact_damping : float
+        kc [N/m] and cc [N s/m] of the compliant law.
+    citation : str
+        Where the numbers come from.
+    """
+
+    profile: Profile
+    mass: float
+    stiffness: float
+    preload: float
+    damping: float = 0.0
+    gravity: float = 0.0
+    contact: str = "rigid"
+    restitution: float = 0.8
+    capture_velocity: float = 1e-6
+    contact_stiffness: float = 0.0
+    contact_damping: float = 0.0
+    citation: str = field(default="", compare=False)
+
+    def __post_init__(self):
+        if not isinstance(self.profile, Profile):
+            raise ParameterError(f"profile must be a camdyn Profile, got {type(self.profile).__name__}")
+        if self.contact not in CONTACT_LAWS:
+            raise ParameterError(f"contact must be one of {', '.join(CONTACT_LAWS)}, got {self.contact!r}")
+        for name in ("mass", "stiffness", "preload", "damping", "gravity", "restitution", "capture_velocity",
+                     "contact_stiffness", "contact_damping"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ParameterError(f"{name} must be a finite number, got {value!r}")
+            if value < 0.0:
+                raise ParameterError(f"{name} must not be negative, got {value!r}")
+        if self.mass <= 0.0:
+            raise ParameterError(f"mass must be positive, got {self.mass!r} kg")
+        if self.restitution > 1.0:
+            raise ParameterError(f"restitution must be between 0 and 1, got {self.restitution!r}")
+        if self.contact == "compliant" and self.contact_stiffness <= 0.0:
+            raise ParameterError("the compliant contact needs a positive contact_stiffness [N/m]")
+
+    def pack(self, speed, phase=0.0):
+        """The parameter vector of the compiled model at ``speed`` [rad/s], cam angle
+        ``phase`` [rad] at t = 0."""
+        return model.pack(self.profile, self.mass, self.stiffness, self.preload, speed, damping=self.damping,
+                          phase=phase, gravity=self.gravity, law=CONTACT_LAWS[self.contact],
+                          restitution=self.restitution, capture=self.capture_velocity,
+                          contact_stiffness=self.contact_stiffness, contact_damping=self.contact_damping)
+
+
+#: The circular-arc cam of the Siconos cam-follower example (the cam law of its
+#: ``FollowerPlugin``, after di Bernardo, Osorio and Santini): base radius, flank arc
+#: (centre distance, radius), nose arc (centre distance, radius), top radius [m], and the
+#: angles where flank and nose end, from the end of the base dwell [rad].
+ALZATE_ARCS = {"base": 0.40, "flank_centre": 0.45, "flank_radius": 0.85, "nose_centre": 0.40393320723821,
+               "nose_radius": 0.15, "top": 0.55393320723821, "flank_end": 1.050328174371336,
+               "nose_end": 1.22173047639603}
+ALZATE_CITATION = (
+    "Siconos examples, mechanics/CamFollower (FollowerPlugin, CamFollower.cpp): follower mass 1.221 kg, "
+    "spring 1430.8 N/m, Newton restitution 0.8, circular-arc cam; after M. di Bernardo, G. Osorio, "
+    "S. Santini, 'Corner-impact bifurcations: a novel class of discontinuity-induced bifurcations in cam-follower "
+    "systems', arXiv:0711.1008 (2007)")
+
+
+def alzate_rig(contact="rigid", contact_stiffness=0.0, contact_damping=0.0):
+    """The cam-follower rig of Alzate and di Bernardo as the Siconos project's example
+    gives it: an in-line knife-edge follower (m = 1.221 kg, k = 1430.8 N/m, e = 0.8) on a
+    symmetric cam of circular arcs: the base circle (r = 0.40 m) for half a turn, a flank
+    arc (radius 0.85 m, centre 0.45 m behind the axis), a nose arc (radius 0.15 m, centre
+    0.4039 m out) and a top arc concentric with the axis (r = 0.5539 m), then the same
+    back. The spring is relaxed at 0.30 m from the axis, so its preload on the base circle
+    is ``k (0.40 - 0.30) = 143.08 N``; no gravity, no damping. Use the phase pi/2 of the
+    source (``simulate_translating(..., phase=math.pi / 2)``) to start where it starts,
+    at the end of the base dwell."""
+    a = ALZATE_ARCS
+    quarter = 0.5 * math.pi
+    nose_angle = math.pi - math.pi / 9.0   # the nose arc's centre in the cam's frame [rad]
+    arcs = [
+        (quarter, 0.0, 0.0, a["base"]),
+        (a["flank_end"], a["flank_centre"], -quarter, a["flank_radius"]),
+        (a["nose_end"] - a["flank_end"], a["nose_centre"], nose_angle, a["nose_radius"]),
+        (math.pi - 2.0 * a["nose_end"], 0.0, 0.0, a["top"]),
+        (a["nose_end"] - a["flank_end"], a["nose_centre"], -nose_angle, a["nose_radius"]),
+        (a["flank_end"], a["flank_centre"], quarter, a["flank_radius"]),
+        (quarter, 0.0, 0.0, a["base"]),
+    ]
+    profile = circular_arc_profile(arcs, a["base"], follower="knife")
+    stiffness = 1430.8
+    return TranslatingFollower(profile, mass=1.221, stiffness=stiffness, preload=stiffness * (a["base"] - 0.30),
+                               contact=contact, restitution=0.8, contact_stiffness=contact_stiffness,
+                               contact_damping=contact_damping, citation=ALZATE_CITATION)
+
+
+def liftoff_speed(follower, samples=200_000):
+    """The lowest cam speed [rad/s] at which a follower held on the cam would need a pull:
+    the smallest positive root over the cam angles of the contact force (eq. 3 of
+    :mod:`camdyn.model.translating_follower`), ``m s'' omega^2 + c s' omega + F0 + k s +
+    m g = 0``; without damping ``omega^2 = min over s'' < 0 of (F0 + k s + m g) / (-m
+    s'')``. Infinite for a cam that never needs a pull. Evaluated on ``samples`` angles and
+    at both sides of every joint."""
+    theta = np.unique(np.r_[np.linspace(0.0, 2.0 * math.pi, samples, endpoint=False),
+                            follower.profile.joints, follower.profile.joints - 1e-12])
+    s, s1, s2, _ = follower.profile.lift(theta)
+    a = follower.mass * s2
+    b = follower.damping * s1
+    c = follower.preload + follower.stiffness * s + follower.mass * follower.gravity
+    if np.any(c <= 0.0):
+        return 0.0   # the spring does not even hold the follower at rest
+    with np.errstate(invalid="ignore", divide="ignore"):
+        # a < 0 < c: one positive root, (-b - sqrt(b^2 - 4 a c)) / (2 a)
+        roots = np.where(a < 0.0, (-b - np.sqrt(b * b - 4.0 * a * c)) / (2.0 * a), np.inf)
+        # a >= 0 and b < 0: a positive root only where b^2 >= 4 a c, the smaller one
+        both = (a > 0.0) & (b < 0.0) & (b * b >= 4.0 * a * c)
+        roots = np.where(both, (-b - np.sqrt(b * b - 4.0 * a * c)) / (2.0 * a), roots)
+        roots = np.where((a == 0.0) & (b < 0.0), -c / b, roots)
+    return float(np.min(roots))
+
+
+def _check_run(speed, duration, sample_rate, rtol, atol):
+    for name, value, unit in (("speed", speed, "rad/s"), ("duration", duration, "s"),
+                              ("sample_rate", sample_rate, "Hz"), ("rtol", rtol, ""), ("atol", atol, "m")):
+        limits.check_number(name, value, unit)
+        if not (math.isfinite(value) and value > 0.0):
+            raise ParameterError(f"{name} must be positive and finite, got {value!r} {unit}".rstrip())
+    if not (1e-14 <= rtol <= 1e-2 and 1e-16 <= atol <= 1e-2):
+        raise ParameterError(f"rtol = {rtol!r} or atol = {atol!r} is outside the sensible range (1e-14 to 1e-2)")
+
+
+def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0, initial_state=None, rtol=1e-10,
+                         atol=1e-12, max_step=None, max_events=None) -> xr.Dataset:
+    """Simulate a translating follower.
+
+    Parameters
+    ----------
+    follower : TranslatingFollower
+        The follower and its cam.
+    speed : float
+        Cam speed omega [rad/s] (``rpm * 2 pi / 60``).
+    duration : float
+        Length of the run [s].
+    sample_rate : float
+        Output sampling rate [Hz].
+    phase : float
+        Cam angle theta0 [rad] at t = 0.
+    initial_state : (float, float), optional
+        ``(x [m], x_dot [m/s])``; default on the cam, moving with it.
+    rtol, atol : float
+        Local error tolerances, relative [-] and absolute [m, m/s].
+    max_step : float, optional
+        Largest step [s]; default 1/64 of the cam period.
+    max_events : int, optional
+        Room in the event log; default 64 per revolution plus 1000.
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``time``: ``x``, ``x_dot``, the cam's ``lift`` and ``lift_rate``, the ``gap``,
+        the ``contact_force`` and ``in_contact``; over ``event``: ``event_time``,
+        ``event_kind`` (``impact``, ``capture`` into sustained contact, ``graze``: a
+        touch slower than the capture velocity where the cam does not push, which leaves
+        the follower in flight, ``separation``, and for the compliant law ``contact
+        onset`` and ``contact end``), ``event_velocity`` (approach velocity of an impact, ``x_dot -
+        s_dot`` [m/s]). Attributes hold the parameters and the solver counters.
+    """
+    if not isinstance(follower, TranslatingFollower):
+        raise ParameterError(f"expected a TranslatingFollower, got {type(follower).__name__}")
+    _check_run(speed, duration, sample_rate, rtol, atol)
+    if not math.isfinite(limits.check_number("phase", phase, "rad")):
+        raise ParameterError(f"phase must be finite, got {phase!r} rad")
+    period = 2.0 * math.pi / speed
+    n_out = limits.check_sampling(sample_rate, period, duration)
+    limits.check_memory(limits.result_bytes(n_out, 8), "the simulation's result")
+    p = follower.pack(float(speed), float(phase))
+    if initial_state is None:
+        _, s, sd, _, _ = model.cam(0.0, p)
+        y0 = np.array([s, sd])
+    else:
+        y0 = np.asarray(initial_state, dtype=float).reshape(-1)
+        if y0.shape != (2,) or not np.all(np.isfinite(y0)):
+            raise ParameterError(f"initial_state must be two finite numbers (x [m], x_dot [m/s]), "
+                                 f"got {initial_state!r}")
+        if y0[0] < model.cam(0.0, p)[1] - 1e-12 * max(1.0, abs(y0[0])) and follower.contact == "rigid":
+            raise ParameterError(f"the follower starts inside the cam (x = {y0[0]} m below the lift "
+                                 f"{model.cam(0.0, p)[1]} m); a rigid contact allows no penetration")
+    if max_step is None:
+        max_step = period / 64.0
+    if max_events is None:
+        max_events = int(1000 + 64 * duration / period)
+    t_out = np.minimum(np.arange(n_out) / sample_rate, duration)
+    start = _time.perf_counter()
+    y, modes, events, counters = driver.integrate(systems.TRANSLATING_FOLLOWER, p, y0, 0.0, float(duration), t_out,
+                                                  float(rtol), float(atol), float(max_step), driver.METHOD_AUTO,
+                                                  50_000_000, int(max_events), True)
+    elapsed = _time.perf_counter() - start
+    status = int(counters[driver.COUNT_STATUS])
+    if status == driver.STATUS_INTERRUPTED:
+        raise KeyboardInterrupt
+    if status != driver.STATUS_OK:
+        raise SimulationError(f"simulation {driver.STATUS_MESSAGES[status]}")
+    return _dataset(follower, p, t_out, y, modes, events, counters, elapsed, speed, phase, rtol, atol)
+
+
+def _event_table(events, p):
+    """Kinds and approach velocities [m/s] of the logged events."""
+    m = systems.guard_count(systems.TRANSLATING_FOLLOWER)
+    kinds, velocities = [], []
+    for ev in events:
+        t, k, v = ev[0], int(ev[1]), ev[driver.EVENT_GUARDS + m + 1]
+        sd = model.cam(t, p)[2]
+        if p[model.LAW] == model.COMPLIANT:
+            kinds.append("contact onset" if ev[2] < 0 else "contact end")
+        elif k == 1:
+            kinds.append("separation")
+        elif -(v - sd) > p[model.CAPTURE]:
+            kinds.append("impact")
+        else:
+            # a touch slower than the capture velocity: held on the cam where it pushes,
+            # else a graze (the gap's rounding noise just after a separation, where gap,
+            # rate and gap acceleration all start at zero), which changes nothing
+            kinds.append("capture" if ev[driver.EVENT_NEW_SIGN] == 0.0 else "graze")
+        velocities.append(v - sd)
+    return np.array(kinds, dtype=str), np.array(velocities, dtype=float)
+
+
+def _dataset(follower, p, t, y, modes, events, counters, elapsed, speed, phase, rtol, atol):
+    lift = np.empty((t.size, 4))
+    force = np.empty(t.size)
+    y = y.copy()
+    for i, ti in enumerate(t):
+        lift[i] = model.cam(ti, p)[1:]
+        y[i] = model.follower_state(ti, y[i], modes[i], p)
+        force[i] = model.contact_force(ti, y[i], modes[i], p)
+    kinds, velocities = _event_table(events, p)
+    data = {
+        "x": (("time",), y[:, 0], {"units": "m", "long_name": "follower position from the base circle"}),
+        "x_dot": (("time",), y[:, 1], {"units": "m/s", "long_name": "follower velocity"}),
+        "lift": (("time",), lift[:, 0], {"units": "m", "long_name": "cam lift s"}),
+        "lift_rate": (("time",), lift[:, 1], {"units": "m/s", "long_name": "cam lift rate s_dot"}),
+        "gap": (("time",), y[:, 0] - lift[:, 0], {"units": "m", "long_name": "gap x - s"}),
+        "contact_force": (("time",), force, {"units": "N", "long_name": "force of the cam on the follower"}),
+        "in_contact": (("time",), modes[:, 0].astype(np.int8), {"units": "1", "long_name": "contact mode"}),
+        "event_time": (("event",), events[:, 0], {"units": "s", "long_name": "event time"}),
+        "event_kind": (("event",), kinds, {"long_name": "event kind"}),
+        "event_velocity": (("event",), velocities,
+                           {"units": "m/s", "long_name": "relative velocity x_dot - s_dot before the event"}),
+    }
+    ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
+    ds.attrs.update({
+        "title": "camdyn translating follower", "citation": follower.citation, "speed_rad_s": float(speed),
+        "phase_rad": float(phase), "mass_kg": follower.mass, "stiffness_N_per_m": follower.stiffness,
+        "preload_N": follower.preload, "damping_N_s_per_m": follower.damping, "gravity_m_per_s2": follower.gravity,
+        "contact": follower.contact, "restitution": follower.restitution,
+        "capture_velocity_m_per_s": follower.capture_velocity,
+        "contact_stiffness_N_per_m": follower.contact_stiffness,
+        "contact_damping_N_s_per_m": follower.contact_damping, "follower": follower.profile.follower,
+        "base_radius_m": follower.profile.base_radius, "rtol": rtol, "atol": atol, "elapsed_s": elapsed,
+        "status": driver.STATUS_MESSAGES[int(counters[driver.COUNT_STATUS])],
+    })
+    for i, name in enumerate(driver.COUNTER_NAMES):
+        ds.attrs[f"solver_{name}"] = int(counters[i])
+    return ds
