@@ -14,15 +14,13 @@ from camdyn.errors import ParameterError
 
 
 def _value(text: str, key: str, unit: str) -> float:
-    """A parameter value [SI] from text with a unit (a bare number: already SI)."""
+    """A parameter value [SI] from text with its unit (a bare number only for a
+    dimensionless parameter, as for ``--set``)."""
     from camdyn.params.units import parse_quantity, parse_speed
 
     if unit == "Hz":
         return parse_speed(text, key)
-    try:
-        return float(text)
-    except ValueError:
-        return float(parse_quantity(text, unit, key))
+    return float(parse_quantity(text, unit, key))
 
 
 def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
@@ -54,8 +52,11 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     first, last = _value(start, "--from", unit), _value(stop, "--to", unit)
     if first == last:
         raise ParameterError("--from and --to must differ")
-    if period < 1 or max_points < 2 or transient < 1 or not step > 0:
-        raise ParameterError("--period and --transient must be at least 1, --max-points at least 2, --step positive")
+    from camdyn.continuation.branches import MIN_STEP
+
+    if period < 1 or max_points < 2 or transient < 1 or not step >= MIN_STEP:
+        raise ParameterError(f"--period and --transient must be at least 1, --max-points at least 2, --step at "
+                             f"least {MIN_STEP:g}")
     problem, branch = _trace(system, parameter, first, last, period, step, max_points, transient, quiet or json_)
     records = [branch_records(problem, branch)]
     bifurcations = bifurcation_records([branch])

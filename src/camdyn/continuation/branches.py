@@ -36,6 +36,9 @@ from camdyn.continuation.orbits import SAMPLES_PER_PERIOD, Flow, Orbit, flow, ma
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError, SimulationError
 
+#: Smallest arclength step by default (scaled units) [-].
+MIN_STEP = 1e-6
+
 __all__ = ["Bifurcation", "Branch", "continue_orbits", "KINDS"]
 
 #: The bifurcations detected, as named in results.
@@ -258,7 +261,7 @@ def _grazing_end(orbits: list[Orbit]) -> list[Bifurcation]:
     return [Bifurcation("grazing", b.parameter - b.guard_minimum / slope, b)]
 
 
-def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0.01, min_step: float = 1e-6,
+def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0.01, min_step: float = MIN_STEP,
                     max_step: float = 0.1, max_points: int = 500, tolerance: float = 1e-10,
                     max_corrections: int = 15, progress: Callable[[Orbit], None] | None = None) -> Branch:
     """Continue the orbit ``start`` in the problem's scalar parameter towards ``stop``.

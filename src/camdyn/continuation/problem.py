@@ -140,6 +140,22 @@ def parameter_unit(system: System, key: str) -> str:
     return "Hz" if unit == "speed" else unit
 
 
+def _check_periodic_motion(system: System, key: str) -> None:
+    """Refuse a cam motion whose forcing is not periodic (a ramp), or a parameter that
+    does not enter the motion that runs (the speed of an oscillating cam, which moves at
+    ``motion.frequency``): shooting would find a fixed point of a map that is not the
+    system's period map, or a branch that does not move."""
+    kind = system.motion.kind
+    if kind == "ramp":
+        raise ParameterError("periodic orbits need a periodic cam motion: a ramp (motion.kind = 'ramp') is not; "
+                             "use motion.kind = 'constant'")
+    if kind == "oscillating" and key == "motion.speed":
+        raise ParameterError("an oscillating cam moves at motion.frequency, not motion.speed: continue in "
+                             "motion.frequency")
+    if kind == "constant" and key in ("motion.frequency", "motion.amplitude", "motion.start_speed", "motion.ramp_time"):
+        raise ParameterError(f"{key} does not enter a cam turning at constant speed (motion.kind = 'constant')")
+
+
 def system_problem(system: System, key: str = "motion.speed", initial_state=None, rtol: float = 1e-10,
                    atol: float = 1e-12) -> Problem:
     """The cam-follower's periodic problem over one cam period ``1 / speed`` [s], the
@@ -152,6 +168,7 @@ def system_problem(system: System, key: str = "motion.speed", initial_state=None
     """
     limits.check_system(system)
     _check_tolerances(rtol, atol)
+    _check_periodic_motion(system, key)
     unit = parameter_unit(system, key)
     value = parameter_index(type(system))[key].getter(system)
     if value is None or not math.isfinite(float(value)):
@@ -170,6 +187,8 @@ def system_problem(system: System, key: str = "motion.speed", initial_state=None
     prep = prepare(system)
     template = prep.y0.copy()
     if initial_state is not None:
+        if len(initial_state) != 2:
+            raise ParameterError(f"initial_state is (alpha [rad], alpha_dot [rad/s]), got {len(initial_state)} values")
         template[0], template[1] = float(initial_state[0]), float(initial_state[1])
         if not np.all(np.isfinite(template)):
             raise ParameterError("initial_state must be finite")

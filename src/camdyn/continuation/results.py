@@ -10,7 +10,7 @@ from collections.abc import Callable
 import numpy as np
 import xarray as xr
 
-from camdyn.continuation.branches import Branch, continue_orbits
+from camdyn.continuation.branches import MIN_STEP, Branch, continue_orbits
 from camdyn.continuation.orbits import Orbit, find_orbit
 from camdyn.continuation.problem import Problem, system_problem
 from camdyn.errors import ParameterError
@@ -38,8 +38,8 @@ def trace_branch(system: System, key: str, start: float, stop: float, periods: i
         raise ParameterError(f"the range must be two different finite values, got {start} and {stop}")
     if int(periods) != periods or periods < 1:
         raise ParameterError(f"the period must be a positive integer number of forcing periods, got {periods}")
-    if transient < 1 or max_points < 2 or not step > 0:
-        raise ParameterError("transient must be at least 1, max_points at least 2 and step positive")
+    if transient < 1 or max_points < 2 or not step >= MIN_STEP:
+        raise ParameterError(f"transient must be at least 1, max_points at least 2 and step at least {MIN_STEP:g}")
     problem = system_problem(system.with_values(**{key: start}), key, rtol=rtol, atol=rtol * 1e-2)
     problem.build(stop)                                       # refuse an end value the system cannot take
     orbit = find_orbit(problem, periods=int(periods), transient=transient)

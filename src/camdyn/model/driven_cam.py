@@ -47,7 +47,7 @@ import numba
 import numpy as np
 
 from camdyn.model import layout as L
-from camdyn.model.dynamics import evaluate_cam
+from camdyn.model.dynamics import evaluate_cam, mode_expected_sign, mode_initial, mode_transition
 from camdyn.model.geometry import contact_kinematics_trig, contact_rates_trig
 
 SHAFT_INERTIA = L.SIZE + 0     # J [kg m^2]
@@ -195,41 +195,17 @@ def guards(t, y, f, known, p, values, rates):
     rates[2] = delta_ddot
 
 
-# The contact modes below follow the cam-follower's branches of camdyn.systems.models.
+# The contact modes are the cam-follower's (camdyn.model.dynamics: mode_*).
 @numba.njit(cache=True)
 def expected_sign(k, mode, p):
     """+1 or -1 for an active guard, 0 for an inactive one (the cam-follower's rule)."""
-    contact = mode[L.MODE_CONTACT] > 0.5
-    if k == 0:
-        return 1.0 if contact else -1.0
-    if not contact:
-        return 0.0
-    if k == 1:
-        return mode[L.MODE_SLIP] if p[L.FRICTION_LAW] == 1.0 else 0.0
-    if mode[L.MODE_IMPACT] > 0.5:
-        return 1.0 if mode[L.MODE_COMPRESSING] > 0.5 else -1.0
-    return 0.0
+    return mode_expected_sign(k, mode, p)
 
 
 @numba.njit(cache=True)
 def transition(k, values, mode):
-    """The mode after guard ``k`` crossed: contact onset or separation, a reversal of
-    sliding, the peak penetration of an impact."""
-    if k == 0:
-        if mode[L.MODE_CONTACT] > 0.5:
-            mode[L.MODE_CONTACT] = 0.0
-        else:
-            mode[L.MODE_CONTACT] = 1.0
-            mode[L.MODE_IMPACT] = 1.0
-            mode[L.MODE_APPROACH] = values[2]
-            mode[L.MODE_SLIP] = 1.0 if values[1] >= 0.0 else -1.0
-            mode[L.MODE_COMPRESSING] = 1.0 if values[2] > 0.0 else 0.0
-    elif k == 1:
-        mode[L.MODE_SLIP] = -mode[L.MODE_SLIP]
-    else:
-        mode[L.MODE_COMPRESSING] = 1.0 - mode[L.MODE_COMPRESSING]
-        if mode[L.MODE_COMPRESSING] < 0.5:
-            mode[L.MODE_IMPACT] = 0.0
+    """The mode after guard ``k`` crossed (the cam-follower's rule)."""
+    mode_transition(k, values, mode)
 
 
 @numba.njit(cache=True)
@@ -238,11 +214,7 @@ def initial_mode(t, y, p, mode):
     values = np.empty(GUARD_COUNT)
     rates = np.empty(GUARD_COUNT)
     guards(t, y, y, False, p, values, rates)
-    mode[L.MODE_CONTACT] = 1.0 if values[0] > 0.0 else 0.0
-    mode[L.MODE_SLIP] = 1.0 if values[1] >= 0.0 else -1.0
-    mode[L.MODE_COMPRESSING] = 1.0 if values[2] > 0.0 else 0.0
-    mode[L.MODE_APPROACH] = p[L.V_REFERENCE]
-    mode[L.MODE_IMPACT] = 0.0
+    mode_initial(values, p, mode)
 
 
 @numba.njit(cache=True)

@@ -29,7 +29,8 @@ from camdyn.model.geometry import (
     contact_rates_trig,
 )
 
-__all__ = ["spring_force", "spring_moment", "evaluate", "evaluate_cam", "rhs", "guards"]
+__all__ = ["spring_force", "spring_moment", "evaluate", "evaluate_cam", "rhs", "guards", "mode_expected_sign",
+           "mode_transition", "mode_initial"]
 
 
 @numba.njit(cache=True)
@@ -222,3 +223,61 @@ def free_acceleration(alpha, p):
     sa = math.sin(alpha)
     fs = spring_force_trig(ca, sa, p)
     return (p[L.MASS] * p[L.GRAVITY] * p[L.CG] * ca + spring_moment_trig(ca, sa, fs, p)) / p[L.INERTIA]
+
+
+# --- the contact modes of a rocking follower on a cam (the cam-follower, system 0, and
+# the cam as a rigid body, camdyn.model.driven_cam), over the guards of :func:`guards`
+
+
+@numba.njit(cache=True)
+def mode_expected_sign(k, mode, p):
+    """+1 or -1 for an active guard ``k``, 0 for an inactive one: the penetration
+    always; the sliding velocity in contact under Coulomb friction; ``delta_dot`` during
+    an impact, until its peak penetration (for the impact table: laws D and E switch on
+    the sign of ``delta_dot`` inside the force law and need no event)."""
+    contact = mode[L.MODE_CONTACT] > 0.5
+    if k == 0:
+        return 1.0 if contact else -1.0
+    if not contact:
+        return 0.0
+    if k == 1:
+        return mode[L.MODE_SLIP] if p[L.FRICTION_LAW] == 1.0 else 0.0
+    if mode[L.MODE_IMPACT] > 0.5:
+        return 1.0 if mode[L.MODE_COMPRESSING] > 0.5 else -1.0
+    return 0.0
+
+
+@numba.njit(cache=True)
+def mode_transition(k, values, mode):
+    """The mode after guard ``k`` crossed, from the guard values ``values`` at the
+    event: contact onset (an impact begins, with its approach velocity) or separation, a
+    reversal of sliding, the peak penetration of an impact."""
+    if k == 0:
+        if mode[L.MODE_CONTACT] > 0.5:
+            mode[L.MODE_CONTACT] = 0.0
+        else:
+            mode[L.MODE_CONTACT] = 1.0
+            mode[L.MODE_IMPACT] = 1.0
+            mode[L.MODE_APPROACH] = values[2]
+            mode[L.MODE_SLIP] = 1.0 if values[1] >= 0.0 else -1.0
+            mode[L.MODE_COMPRESSING] = 1.0 if values[2] > 0.0 else 0.0
+    elif k == 1:
+        mode[L.MODE_SLIP] = -mode[L.MODE_SLIP]
+    else:
+        mode[L.MODE_COMPRESSING] = 1.0 - mode[L.MODE_COMPRESSING]
+        if mode[L.MODE_COMPRESSING] < 0.5:
+            # the impact's peak is passed (its force peaks at or before it): stop
+            # watching delta_dot, which in sustained stiff contact hovers at zero and
+            # would cross it on rounding noise alone
+            mode[L.MODE_IMPACT] = 0.0
+
+
+@numba.njit(cache=True)
+def mode_initial(values, p, mode):
+    """The mode at the start from the guard values ``values``: in contact where the
+    penetration is positive, no impact under way."""
+    mode[L.MODE_CONTACT] = 1.0 if values[0] > 0.0 else 0.0
+    mode[L.MODE_SLIP] = 1.0 if values[1] >= 0.0 else -1.0
+    mode[L.MODE_COMPRESSING] = 1.0 if values[2] > 0.0 else 0.0
+    mode[L.MODE_APPROACH] = p[L.V_REFERENCE]
+    mode[L.MODE_IMPACT] = 0.0

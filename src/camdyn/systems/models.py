@@ -193,18 +193,7 @@ def expected_sign(system, k, mode, p):
     if system >= STICK_SLIP:   # mechanisms
         return _mechanism_expected_sign(system, k, mode, p)
     if system == CAM_FOLLOWER:
-        contact = mode[L.MODE_CONTACT] > 0.5
-        if k == 0:
-            return 1.0 if contact else -1.0
-        if not contact:
-            return 0.0
-        if k == 1:
-            return mode[L.MODE_SLIP] if p[L.FRICTION_LAW] == 1.0 else 0.0
-        # peak penetration of an impact, for the impact table (laws D and E switch on
-        # the sign of delta_dot inside the force law and need no event)
-        if mode[L.MODE_IMPACT] > 0.5:
-            return 1.0 if mode[L.MODE_COMPRESSING] > 0.5 else -1.0
-        return 0.0
+        return dynamics.mode_expected_sign(k, mode, p)
     if system == RIGID_IMPACT or system == COUPLED_OSCILLATORS:
         return 1.0   # the gap to the wall stays positive in flight
     if system == TRANSLATING_FOLLOWER:
@@ -220,24 +209,7 @@ def transition(system, k, t, y, values, mode, p):
         _mechanism_transition(system, k, t, y, values, mode, p)
         return
     if system == CAM_FOLLOWER:
-        if k == 0:
-            if mode[L.MODE_CONTACT] > 0.5:
-                mode[L.MODE_CONTACT] = 0.0
-            else:
-                mode[L.MODE_CONTACT] = 1.0
-                mode[L.MODE_IMPACT] = 1.0
-                mode[L.MODE_APPROACH] = values[2]
-                mode[L.MODE_SLIP] = 1.0 if values[1] >= 0.0 else -1.0
-                mode[L.MODE_COMPRESSING] = 1.0 if values[2] > 0.0 else 0.0
-        elif k == 1:
-            mode[L.MODE_SLIP] = -mode[L.MODE_SLIP]
-        else:
-            mode[L.MODE_COMPRESSING] = 1.0 - mode[L.MODE_COMPRESSING]
-            if mode[L.MODE_COMPRESSING] < 0.5:
-                # the impact's peak is passed (its force peaks at or before it): stop
-                # watching delta_dot, which in sustained stiff contact hovers at zero and
-                # would cross it on rounding noise alone
-                mode[L.MODE_IMPACT] = 0.0
+        dynamics.mode_transition(k, values, mode)
     elif system == RIGID_IMPACT:
         impact_oscillator.reset(y, p)   # the state jumps; the mode stays
     elif system == COUPLED_OSCILLATORS:
@@ -257,11 +229,7 @@ def initial_mode(system, t, y, p, mode):
     rates = np.empty(guard_count(system))
     guards(system, t, y, y, False, p, values, rates)
     if system == CAM_FOLLOWER:
-        mode[L.MODE_CONTACT] = 1.0 if values[0] > 0.0 else 0.0
-        mode[L.MODE_SLIP] = 1.0 if values[1] >= 0.0 else -1.0
-        mode[L.MODE_COMPRESSING] = 1.0 if values[2] > 0.0 else 0.0
-        mode[L.MODE_APPROACH] = p[L.V_REFERENCE]
-        mode[L.MODE_IMPACT] = 0.0
+        dynamics.mode_initial(values, p, mode)
     elif system == TRANSLATING_FOLLOWER:
         translating.initial_mode(t, y, p, mode)
     else:
