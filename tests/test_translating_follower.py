@@ -251,7 +251,10 @@ def test_bad_parameters_are_refused(change, match):
 def test_bad_runs_are_refused_before_any_work():
     rig = alzate_rig()
     for kwargs, match in (({"speed": -1.0, "duration": 1.0}, "speed"), ({"speed": 10.0, "duration": 0.0}, "duration"),
-                          ({"speed": 10.0, "duration": 1.0, "initial_state": (0.0,)}, "initial_state")):
+                          ({"speed": 10.0, "duration": 1.0, "initial_state": (0.0,)}, "initial_state"),
+                          ({"speed": 10.0, "duration": 1.0, "max_step": -1.0}, "max_step"),
+                          ({"speed": 10.0, "duration": 1.0, "max_step": math.nan}, "max_step"),
+                          ({"speed": 10.0, "duration": 1.0, "max_events": 0}, "max_events")):
         with pytest.raises(ParameterError, match=match):
             simulate_translating(rig, **kwargs)
 

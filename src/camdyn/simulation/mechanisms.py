@@ -214,7 +214,13 @@ def simulate_driven_cam(system: System, drive: CamDrive, revolutions: float = 5.
         duration = limits.check_number("revolutions", revolutions) * period
     prep = prepare(system)
     p = np.r_[prep.p, drive.slots()]
-    y0 = np.array([prep.equilibrium.angle, 0.0, prep.theta0, speed, 0.0, 0.0, 0.0, 0.0])
+    angle = prep.equilibrium.angle
+    if initial_speed is not None and speed != 0.0 and speed != system.motion.angular_speed:
+        # the static equilibrium under the friction of the speed the run starts at
+        start = system.with_values(**{"motion.speed": abs(speed) / (2.0 * math.pi),
+                                      "motion.direction": 1 if speed > 0.0 else -1})
+        angle = prepare(start).equilibrium.angle
+    y0 = np.array([angle, 0.0, prep.theta0, speed, 0.0, 0.0, 0.0, 0.0])
     t, y, modes, events, attrs = _run(systems.DRIVEN_CAM, p, y0, duration, sample_rate, period, rtol, atol,
                                       method, max_step)
     data = {name: (("time",), y[:, i], {"units": unit, "long_name": long})

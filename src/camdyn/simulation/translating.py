@@ -237,6 +237,10 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
         max_step = period / 64.0
     if max_events is None:
         max_events = int(1000 + 64 * duration / period)
+    if not (isinstance(max_step, (int, float)) and math.isfinite(max_step) and max_step > 0.0):
+        raise ParameterError(f"max_step must be a positive number of seconds, got {max_step!r}")
+    if not (isinstance(max_events, (int, np.integer)) and max_events > 0):
+        raise ParameterError(f"max_events must be a positive whole number, got {max_events!r}")
     t_out = np.minimum(np.arange(n_out) / sample_rate, duration)
     start = _time.perf_counter()
     y, modes, events, counters = driver.integrate(systems.TRANSLATING_FOLLOWER, p, y0, 0.0, float(duration), t_out,
