@@ -26,14 +26,15 @@ second against a wall (:mod:`camdyn.model.coupled_oscillator`, 4 states, 1 guard
 three test the integrator. System 4 is a translating follower on a cam of any profile,
 with rigid (Newton restitution, sustained contact) or compliant contact
 (:mod:`camdyn.model.translating_follower`, 2 states, 2 guards). The mechanisms, ids 5
-and up, sit in one block at the end of this module, each function here sending them
-there in its first lines: system 5 is the stick-slip oscillator
+and up, are dispatched by :mod:`camdyn.systems.mechanisms`, each function here sending
+them there in its first lines: system 5 is the stick-slip oscillator
 (:mod:`camdyn.model.stick_slip`, 3 states, 3 guards) and system 6 the cam-follower with
 the cam as a rigid body on a driven shaft (:mod:`camdyn.model.driven_cam`, 8 states, the
 cam-follower's 3 guards and modes).
 
-A new model gets an id here and a branch in each function; this module is the only one
-that imports the models.
+A new model gets an id here (or, for a mechanism, in :mod:`camdyn.systems.mechanisms`)
+and a branch in each function; these two modules are the only ones that import the
+models.
 """
 
 from __future__ import annotations
@@ -43,9 +44,10 @@ import math
 import numba
 import numpy as np
 
-from camdyn.model import coupled_oscillator, driven_cam, dynamics, impact_oscillator, stick_slip
+from camdyn.model import coupled_oscillator, dynamics, impact_oscillator
 from camdyn.model import layout as L
 from camdyn.model import translating_follower as translating
+from camdyn.systems import mechanisms
 
 CAM_FOLLOWER = 0
 OSCILLATOR = 1
@@ -53,14 +55,15 @@ RIGID_IMPACT = 2
 COUPLED_OSCILLATORS = 3
 TRANSLATING_FOLLOWER = 4
 # --- mechanisms (ids 5 and up; their branches are the blocks marked "mechanisms" below)
-STICK_SLIP = 5
+STICK_SLIP = mechanisms.STICK_SLIP
+DRIVEN_CAM = mechanisms.DRIVEN_CAM
 
 
 @numba.njit(cache=True)
 def state_size(system):
     """Number of state components."""
     if system >= STICK_SLIP:   # mechanisms
-        return _mechanism_sizes(system)[0]
+        return mechanisms.sizes(system)[0]
     if system == COUPLED_OSCILLATORS:
         return coupled_oscillator.STATE_SIZE
     if system == TRANSLATING_FOLLOWER:
@@ -73,7 +76,7 @@ def controlled_size(system):
     """Number of leading state components under error control: the cam-follower's and
     the oscillators' third component is a quadrature that feeds back into nothing."""
     if system >= STICK_SLIP:   # mechanisms
-        return _mechanism_sizes(system)[1]
+        return mechanisms.sizes(system)[1]
     if system == COUPLED_OSCILLATORS:
         return coupled_oscillator.STATE_SIZE
     if system == TRANSLATING_FOLLOWER:
@@ -85,7 +88,7 @@ def controlled_size(system):
 def guard_count(system):
     """Number of guard functions."""
     if system >= STICK_SLIP:   # mechanisms
-        return _mechanism_sizes(system)[2]
+        return mechanisms.sizes(system)[2]
     if system == CAM_FOLLOWER:
         return 3
     if system == TRANSLATING_FOLLOWER:
@@ -97,7 +100,7 @@ def guard_count(system):
 def mode_size(system):
     """Number of slots of the mode vector."""
     if system >= STICK_SLIP:   # mechanisms
-        return _mechanism_sizes(system)[3]
+        return mechanisms.sizes(system)[3]
     if system == CAM_FOLLOWER:
         return L.MODE_SIZE
     if system == TRANSLATING_FOLLOWER:
@@ -116,7 +119,7 @@ def _osc_rhs(t, y, p, dydt):
 @numba.njit(cache=True)
 def rhs(system, t, y, mode, p, dydt):
     if system >= STICK_SLIP:   # mechanisms
-        _mechanism_rhs(system, t, y, mode, p, dydt)
+        mechanisms.rhs(system, t, y, mode, p, dydt)
         return
     if system == CAM_FOLLOWER:
         dynamics.rhs(t, y, mode, p, dydt)
@@ -135,7 +138,7 @@ def rhs_inline(system, t, y, mode, p, dydt):
     about a fifth of a DOP853 step; the other callers keep the call, which compiles
     faster."""
     if system >= STICK_SLIP:   # mechanisms
-        _mechanism_rhs(system, t, y, mode, p, dydt)
+        mechanisms.rhs(system, t, y, mode, p, dydt)
         return
     if system == CAM_FOLLOWER:
         dynamics.rhs(t, y, mode, p, dydt)
@@ -151,7 +154,7 @@ def rhs_inline(system, t, y, mode, p, dydt):
 def jacobian(system, t, y, f0, mode, p, jac):
     """The Jacobian ``jac = d f / d y`` (n x n) at ``(t, y)``, where ``f0 = f(t, y)``."""
     if system >= STICK_SLIP:   # mechanisms
-        _mechanism_jacobian(system, t, y, f0, mode, p, jac)
+        mechanisms.jacobian(system, t, y, f0, mode, p, jac)
         return
     if system == COUPLED_OSCILLATORS:
         coupled_oscillator.jacobian(p, jac)
@@ -173,7 +176,7 @@ def jacobian(system, t, y, f0, mode, p, jac):
 @numba.njit(cache=True)
 def guards(system, t, y, f, known, p, values, rates):
     if system >= STICK_SLIP:   # mechanisms
-        _mechanism_guards(system, t, y, f, known, p, values, rates)
+        mechanisms.guards(system, t, y, f, known, p, values, rates)
         return
     if system == CAM_FOLLOWER:
         dynamics.guards(t, y, f[1] if known else math.nan, p, values, rates)
@@ -191,7 +194,7 @@ def guards(system, t, y, f, known, p, values, rates):
 @numba.njit(cache=True)
 def expected_sign(system, k, mode, p):
     if system >= STICK_SLIP:   # mechanisms
-        return _mechanism_expected_sign(system, k, mode, p)
+        return mechanisms.expected_sign(system, k, mode, p)
     if system == CAM_FOLLOWER:
         return dynamics.mode_expected_sign(k, mode, p)
     if system == RIGID_IMPACT or system == COUPLED_OSCILLATORS:
@@ -206,7 +209,7 @@ def expected_sign(system, k, mode, p):
 @numba.njit(cache=True)
 def transition(system, k, t, y, values, mode, p):
     if system >= STICK_SLIP:   # mechanisms
-        _mechanism_transition(system, k, t, y, values, mode, p)
+        mechanisms.transition(system, k, t, y, values, mode, p)
         return
     if system == CAM_FOLLOWER:
         dynamics.mode_transition(k, values, mode)
@@ -223,7 +226,7 @@ def transition(system, k, t, y, values, mode, p):
 @numba.njit(cache=True)
 def initial_mode(system, t, y, p, mode):
     if system >= STICK_SLIP:   # mechanisms
-        _mechanism_initial_mode(system, t, y, p, mode)
+        mechanisms.initial_mode(system, t, y, p, mode)
         return
     values = np.empty(guard_count(system))
     rates = np.empty(guard_count(system))
@@ -241,7 +244,7 @@ def regime(system, mode, p):
     """Index (0 or 1) of the dynamic regime of a mode; the driver remembers the last step
     size of each regime, so that a step after an event starts at the right scale."""
     if system >= STICK_SLIP:   # mechanisms
-        return _mechanism_regime(system, mode, p)
+        return mechanisms.regime(system, mode, p)
     if system == CAM_FOLLOWER:
         return 1 if mode[L.MODE_CONTACT] > 0.5 else 0
     if system == TRANSLATING_FOLLOWER:
@@ -268,7 +271,7 @@ def preferred_method(system, mode, p):
 @numba.njit(cache=True)
 def monitor(system, t, y, mode, p):
     if system >= STICK_SLIP:   # mechanisms
-        return _mechanism_monitor(system, t, y, mode, p)
+        return mechanisms.monitor(system, t, y, mode, p)
     if system == CAM_FOLLOWER:
         # peak force of impacts only (the impact table); free flight and sustained
         # contact cost nothing
@@ -278,78 +281,3 @@ def monitor(system, t, y, mode, p):
     if system == TRANSLATING_FOLLOWER:
         return translating.contact_force(t, y, mode, p)   # the largest force of a contact
     return abs(y[0])
-
-
-# --- mechanisms: the stick-slip oscillator (5) and the cam as a rigid body (6) --------
-DRIVEN_CAM = 6
-
-
-@numba.njit(cache=True)
-def _mechanism_sizes(system):
-    """``(state_size, controlled_size, guard_count, mode_size)`` of a mechanism."""
-    if system == STICK_SLIP:
-        return stick_slip.STATE_SIZE, 2, stick_slip.GUARD_COUNT, 1
-    return driven_cam.STATE_SIZE, driven_cam.CONTROLLED_SIZE, driven_cam.GUARD_COUNT, L.MODE_SIZE
-
-
-@numba.njit(cache=True)
-def _mechanism_rhs(system, t, y, mode, p, dydt):
-    if system == STICK_SLIP:
-        stick_slip.rhs(t, y, mode, p, dydt)
-    else:
-        driven_cam.rhs(t, y, mode, p, dydt)
-
-
-@numba.njit(cache=True)
-def _mechanism_jacobian(system, t, y, f0, mode, p, jac):
-    if system == STICK_SLIP:
-        stick_slip.jacobian(t, y, mode, p, jac)
-    else:
-        driven_cam.jacobian(t, y, mode, p, jac)
-
-
-@numba.njit(cache=True)
-def _mechanism_guards(system, t, y, f, known, p, values, rates):
-    if system == STICK_SLIP:
-        stick_slip.guards(t, y, f, known, p, values, rates)
-    else:
-        driven_cam.guards(t, y, f, known, p, values, rates)
-
-
-@numba.njit(cache=True)
-def _mechanism_expected_sign(system, k, mode, p):
-    if system == STICK_SLIP:
-        return stick_slip.expected_sign(k, mode, p)
-    return driven_cam.expected_sign(k, mode, p)
-
-
-@numba.njit(cache=True)
-def _mechanism_transition(system, k, t, y, values, mode, p):
-    if system == STICK_SLIP:
-        stick_slip.transition(k, t, y, mode, p)
-    else:
-        driven_cam.transition(k, values, mode)
-
-
-@numba.njit(cache=True)
-def _mechanism_initial_mode(system, t, y, p, mode):
-    if system == STICK_SLIP:
-        stick_slip.initial_mode(t, y, p, mode)
-    else:
-        driven_cam.initial_mode(t, y, p, mode)
-
-
-@numba.njit(cache=True)
-def _mechanism_regime(system, mode, p):
-    """Sticking and slipping (stick-slip), free flight and contact (driven cam)."""
-    if system == STICK_SLIP:
-        return 0 if mode[0] == 0.0 else 1
-    return 1 if mode[L.MODE_CONTACT] > 0.5 else 0
-
-
-@numba.njit(cache=True)
-def _mechanism_monitor(system, t, y, mode, p):
-    """The extension ``|x|`` [m] (stick-slip); an impact's normal force [N] (driven cam)."""
-    if system == STICK_SLIP:
-        return abs(y[0])
-    return driven_cam.monitor(t, y, mode, p)

@@ -1,0 +1,88 @@
+"""The mechanisms the compiled driver can integrate, ids 5 and up, each behind one branch
+of every function here; :mod:`camdyn.systems.models` sends every mechanism id here in
+the first lines of its functions, which have the same meaning as there.
+
+System 5 is the stick-slip oscillator (:mod:`camdyn.model.stick_slip`, 3 states, 3
+guards) and system 6 the cam-follower with the cam as a rigid body on a driven shaft
+(:mod:`camdyn.model.driven_cam`, 8 states, the cam-follower's 3 guards and modes).
+"""
+
+from __future__ import annotations
+
+import numba
+
+from camdyn.model import driven_cam, stick_slip
+from camdyn.model import layout as L
+
+STICK_SLIP = 5
+DRIVEN_CAM = 6
+
+@numba.njit(cache=True)
+def sizes(system):
+    """``(state_size, controlled_size, guard_count, mode_size)`` of a mechanism."""
+    if system == STICK_SLIP:
+        return stick_slip.STATE_SIZE, 2, stick_slip.GUARD_COUNT, 1
+    return driven_cam.STATE_SIZE, driven_cam.CONTROLLED_SIZE, driven_cam.GUARD_COUNT, L.MODE_SIZE
+
+
+@numba.njit(cache=True)
+def rhs(system, t, y, mode, p, dydt):
+    if system == STICK_SLIP:
+        stick_slip.rhs(t, y, mode, p, dydt)
+    else:
+        driven_cam.rhs(t, y, mode, p, dydt)
+
+
+@numba.njit(cache=True)
+def jacobian(system, t, y, f0, mode, p, jac):
+    if system == STICK_SLIP:
+        stick_slip.jacobian(t, y, mode, p, jac)
+    else:
+        driven_cam.jacobian(t, y, mode, p, jac)
+
+
+@numba.njit(cache=True)
+def guards(system, t, y, f, known, p, values, rates):
+    if system == STICK_SLIP:
+        stick_slip.guards(t, y, f, known, p, values, rates)
+    else:
+        driven_cam.guards(t, y, f, known, p, values, rates)
+
+
+@numba.njit(cache=True)
+def expected_sign(system, k, mode, p):
+    if system == STICK_SLIP:
+        return stick_slip.expected_sign(k, mode, p)
+    return driven_cam.expected_sign(k, mode, p)
+
+
+@numba.njit(cache=True)
+def transition(system, k, t, y, values, mode, p):
+    if system == STICK_SLIP:
+        stick_slip.transition(k, t, y, mode, p)
+    else:
+        driven_cam.transition(k, values, mode)
+
+
+@numba.njit(cache=True)
+def initial_mode(system, t, y, p, mode):
+    if system == STICK_SLIP:
+        stick_slip.initial_mode(t, y, p, mode)
+    else:
+        driven_cam.initial_mode(t, y, p, mode)
+
+
+@numba.njit(cache=True)
+def regime(system, mode, p):
+    """Sticking and slipping (stick-slip), free flight and contact (driven cam)."""
+    if system == STICK_SLIP:
+        return 0 if mode[0] == 0.0 else 1
+    return 1 if mode[L.MODE_CONTACT] > 0.5 else 0
+
+
+@numba.njit(cache=True)
+def monitor(system, t, y, mode, p):
+    """The extension ``|x|`` [m] (stick-slip); an impact's normal force [N] (driven cam)."""
+    if system == STICK_SLIP:
+        return abs(y[0])
+    return driven_cam.monitor(t, y, mode, p)
