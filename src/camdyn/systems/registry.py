@@ -5,7 +5,8 @@ A system id below :data:`VARIATIONAL` is a model (:mod:`camdyn.systems.models`, 
 the interface each model provides is described and where a new model is added); the id
 ``VARIATIONAL + model`` is that model's variational system
 (:mod:`camdyn.systems.variational`: the state with its state-transition matrix, and the
-saltation matrix at every event). Every function here dispatches on that split; the
+saltation matrix at every event), and ``k PARAMETRIC + VARIATIONAL + model`` the same
+with ``k`` parameter sensitivities. Every function here dispatches on that split; the
 driver sizes its arrays from :func:`state_size`, :func:`guard_count` and
 :func:`mode_size`.
 """
@@ -24,24 +25,26 @@ from camdyn.systems.models import (
     STICK_SLIP,
     TRANSLATING_FOLLOWER,
 )
-from camdyn.systems.variational import VARIATIONAL
+from camdyn.systems.variational import PARAMETRIC, VARIATIONAL
 
 __all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", "TRANSLATING_FOLLOWER", "STICK_SLIP",
-           "DRIVEN_CAM", "VARIATIONAL", "state_size", "controlled_size", "guard_count", "mode_size", "rhs",
+           "DRIVEN_CAM", "VARIATIONAL", "PARAMETRIC", "state_size", "controlled_size", "guard_count", "mode_size",
+           "rhs",
            "rhs_inline", "jacobian", "guards",
            "expected_sign", "transition", "initial_mode", "regime", "preferred_method", "monitor"]
 
 
 @numba.njit(cache=True)
 def _model(system):
-    return system - VARIATIONAL if system >= VARIATIONAL else system
+    return variational.split(system)[0] if system >= VARIATIONAL else system
 
 
 @numba.njit(cache=True)
 def state_size(system):
     """Number of state components."""
     if system >= VARIATIONAL:
-        return variational.state_size(system - VARIATIONAL)
+        model, count = variational.split(system)
+        return variational.state_size(model, count)
     return models.state_size(system)
 
 
@@ -50,7 +53,8 @@ def controlled_size(system):
     """Number of leading state components under error control (a variational system's
     all: its state and its matrix)."""
     if system >= VARIATIONAL:
-        return variational.state_size(system - VARIATIONAL)
+        model, count = variational.split(system)
+        return variational.state_size(model, count)
     return models.controlled_size(system)
 
 
@@ -69,7 +73,8 @@ def mode_size(system):
 @numba.njit(cache=True)
 def rhs(system, t, y, mode, p, dydt):
     if system >= VARIATIONAL:
-        variational.rhs(system - VARIATIONAL, t, y, mode, p, dydt)
+        model, count = variational.split(system)
+        variational.rhs(model, count, t, y, mode, p, dydt)
     else:
         models.rhs(system, t, y, mode, p, dydt)
 
@@ -78,7 +83,8 @@ def rhs(system, t, y, mode, p, dydt):
 def rhs_inline(system, t, y, mode, p, dydt):
     """:func:`rhs` compiled into its caller (numba IR inlining): DOP853's stages use it."""
     if system >= VARIATIONAL:
-        variational.rhs(system - VARIATIONAL, t, y, mode, p, dydt)
+        model, count = variational.split(system)
+        variational.rhs(model, count, t, y, mode, p, dydt)
     else:
         models.rhs_inline(system, t, y, mode, p, dydt)
 
@@ -87,7 +93,8 @@ def rhs_inline(system, t, y, mode, p, dydt):
 def jacobian(system, t, y, f0, mode, p, jac):
     """The Jacobian ``jac = d f / d y`` (n x n) at ``(t, y)``, where ``f0 = f(t, y)``."""
     if system >= VARIATIONAL:
-        variational.jacobian(system - VARIATIONAL, t, y, f0, mode, p, jac)
+        model, count = variational.split(system)
+        variational.jacobian(model, count, t, y, f0, mode, p, jac)
     else:
         models.jacobian(system, t, y, f0, mode, p, jac)
 
@@ -97,7 +104,7 @@ def guards(system, t, y, f, known, p, values, rates):
     """Guard values and their exact rates (NaN where unknown) at ``(t, y)``; ``f`` is
     ``dy/dt`` there when ``known``."""
     if system >= VARIATIONAL:
-        model = system - VARIATIONAL
+        model = _model(system)
         n = models.state_size(model)
         models.guards(model, t, y[:n], f[:n], known, p, values, rates)
     else:
@@ -114,7 +121,8 @@ def expected_sign(system, k, mode, p):
 def transition(system, k, t, y, values, mode, p):
     """The new mode after guard ``k`` crossed, and the state's reset if any."""
     if system >= VARIATIONAL:
-        variational.transition(system - VARIATIONAL, k, t, y, values, mode, p)
+        model, count = variational.split(system)
+        variational.transition(model, count, k, t, y, values, mode, p)
     else:
         models.transition(system, k, t, y, values, mode, p)
 

@@ -1,5 +1,6 @@
-"""The variational system of a registered model: its state and its state-transition
-matrix, integrated together, with the saltation matrix applied at every event.
+"""The variational system of a registered model: its state, its state-transition matrix
+and, on request, its derivatives with respect to parameters, integrated together, with the
+saltation matrix applied at every event.
 
 For a model of ``n`` states the variational system has ``n + n^2`` states: the model's
 ``y``, then ``Phi`` (row-major, ``Phi[i, j] = Y[n + i n + j]``) with ``Phi' = J(t, y) Phi``
@@ -7,7 +8,7 @@ between events. At an event of guard ``g`` (before: mode ``-``; after: mode ``+`
 reset ``y+ = R(y-)``) the matrix jumps by the saltation matrix (Aizerman and Gantmacher
 1958; Leine and Nijmeijer 2004, doi:10.1007/978-3-540-44398-8)::
 
-    S = R_y + (f+ - R_y f-) grad(g)^T / (dg/dt)-,      Phi+ = S Phi-
+    S = R_y + (f+ - R_y f-) grad(g)^T / (dg/dt)-,      Phi+ = S Phi-                (1)
 
 where ``(dg/dt)-`` is the guard's exact rate before the event (the system's own guard
 rates), ``grad(g)`` its gradient in ``y`` and ``R_y`` the reset's Jacobian, both by
@@ -15,7 +16,24 @@ central differences of the model's guard and transition functions (the guards an
 are smooth in ``y``). Over one period of a periodic orbit ``Phi`` is the monodromy
 matrix, whose eigenvalues are the Floquet multipliers.
 
-Every component is error-controlled (the matrix too); the explicit steppers are used
+**Parameter sensitivities.** With ``k`` parameters ``q_j`` the system has ``n k`` more
+states, the columns ``Y_j = d y / d q_j`` (``Y[n + n^2 + j n + i]``), with
+``Y_j' = J Y_j + df/dq_j`` between events and, at an event (differentiating the event time
+``g(y(t*), t*, q) = 0`` with respect to ``q_j``)::
+
+    Y_j+ = S Y_j- + dR/dq_j + (f+ - R_y f-) (dg/dq_j) / (dg/dt)-                   (2)
+
+A parameter is a direction in the parameter vector: its slots ``p[:L]`` move by
+``dp/dq_j`` per unit of ``q_j``. The ``k`` directions follow the model's ``L`` slots in
+``p``, each as ``(h_j, h_j dp/dq_j)`` (``L + 1`` values); ``df/dq_j`` is the fourth-order central
+difference over ``p[:L] + (-2, -1, 1, 2) h_j dp/dq_j``, ``dg/dq_j`` and ``dR/dq_j`` the
+second-order one over ``p[:L] +- h_j dp/dq_j`` (guards and resets are evaluated once per
+event, the field at every stage). The system id carries ``k``: :func:`system_id`. The derivatives
+are taken at a fixed initial state and with the model's mode vector held (a mode slot
+that stores a parameter-dependent value, such as an impact's approach velocity, is not
+differentiated).
+
+Every component is error-controlled (the matrices too); the explicit steppers are used
 (:func:`preferred_method` returns DOP853).
 """
 
@@ -28,42 +46,93 @@ from camdyn.systems import models
 
 #: Variational systems have ids ``VARIATIONAL + model id``.
 VARIATIONAL = 100
+#: With ``k`` parameter sensitivities, ``k PARAMETRIC + VARIATIONAL + model id``.
+PARAMETRIC = 1000
 #: Relative step of the central differences of guards and resets [-].
 DIFFERENCE_STEP = 1e-7
 
 
 @numba.njit(cache=True)
-def state_size(model):
-    n = models.state_size(model)
-    return n + n * n
+def system_id(model, count):
+    """Id of ``model``'s variational system with ``count`` parameter sensitivities."""
+    return count * PARAMETRIC + VARIATIONAL + model
 
 
 @numba.njit(cache=True)
-def rhs(model, t, y, mode, p, dydt):
-    """``(f(t, y), J(t, y) Phi)`` into ``dydt``."""
+def split(system):
+    """``(model, count)`` of a variational system's id (see :func:`system_id`)."""
+    return system % PARAMETRIC - VARIATIONAL, system // PARAMETRIC
+
+
+@numba.njit(cache=True)
+def state_size(model, count):
+    n = models.state_size(model)
+    return n + n * n + n * count
+
+
+@numba.njit(cache=True)
+def _direction(p, count, j):
+    """``(L, h_j, first slot of h_j dp/dq_j)`` of parameter ``j`` (see the module's
+    docstring)."""
+    length = (p.shape[0] - count) // (count + 1)
+    slot = length + j * (length + 1)
+    return length, p[slot], slot + 1
+
+
+@numba.njit(cache=True)
+def _moved(p, count, j, sign):
+    """A copy of ``p`` with ``p[:L]`` moved by ``sign h_j dp/dq_j``, and ``h_j``."""
+    length, step, first = _direction(p, count, j)
+    moved = p.copy()
+    for i in range(length):
+        moved[i] += sign * p[first + i]
+    return moved, step
+
+
+@numba.njit(cache=True)
+def rhs(model, count, t, y, mode, p, dydt):
+    """``(f(t, y), J(t, y) Phi, J Y_j + df/dq_j)`` into ``dydt``."""
     n = models.state_size(model)
     x = y[:n]
     f = dydt[:n]
     models.rhs(model, t, x, mode, p, f)
     jac = np.empty((n, n))
     models.jacobian(model, t, x, f, mode, p, jac)
-    for i in range(n):
-        for j in range(n):
+    for c in range(n + count):
+        column = n + c * n if c >= n else n + c   # Phi's column c, or parameter c - n
+        stride = 1 if c >= n else n
+        for i in range(n):
             acc = 0.0
             for k in range(n):
-                acc += jac[i, k] * y[n + k * n + j]
-            dydt[n + i * n + j] = acc
+                acc += jac[i, k] * y[column + k * stride]
+            dydt[column + i * stride] = acc
+    if count == 0:
+        return
+    # df/dq_j by the fourth-order central difference (f(-2h) - 8 f(-h) + 8 f(h) - f(2h)) / 12h:
+    # a parameter that moves the cam's angle moves it by h t dTheta/dq, which in a stiff
+    # contact is not small against the penetration (the second-order difference's error
+    # was 1e-3 of the derivative through an impact of the chapter 3 rig at h = 1e-7 q)
+    values = np.empty(n)
+    weights = (1.0, -8.0, 8.0, -1.0)
+    signs = (-2.0, -1.0, 1.0, 2.0)
+    for j in range(count):
+        base = n + n * n + j * n
+        for r in range(4):
+            moved, step = _moved(p, count, j, signs[r])
+            models.rhs(model, t, x, mode, moved, values)
+            for i in range(n):
+                dydt[base + i] += weights[r] * values[i] / (12.0 * step)
 
 
 @numba.njit(cache=True)
-def jacobian(model, t, y, f0, mode, p, jac):
+def jacobian(model, count, t, y, f0, mode, p, jac):
     """The block-diagonal part ``diag(J, J, ..., J)`` (the term ``d(J Phi)/dy`` left out:
     the variational system is integrated by explicit steppers)."""
     n = models.state_size(model)
     block = np.empty((n, n))
     models.jacobian(model, t, y[:n], f0[:n], mode, p, block)
     jac[:, :] = 0.0
-    for b in range(n + 1):
+    for b in range(n + 1 + count):
         for i in range(n):
             for j in range(n):
                 jac[b * n + i, b * n + j] = block[i, j]
@@ -109,9 +178,34 @@ def _reset_jacobian(model, k, t, x, values, mode, p, reset):
 
 
 @numba.njit(cache=True)
+def _parameter_jumps(model, count, k, t, x, values, mode, p, reset_rates, guard_rates):
+    """Central differences over each parameter ``j`` of the reset, ``dR/dq_j`` into
+    ``reset_rates[:, j]``, and of guard ``k``, ``dg/dq_j`` into ``guard_rates[j]``, at the
+    state ``x`` before the event."""
+    n = x.shape[0]
+    m = models.guard_count(model)
+    vals = np.empty(m)
+    rates = np.empty(m)
+    for j in range(count):
+        plus, step = _moved(p, count, j, 1.0)
+        minus, step = _moved(p, count, j, -1.0)
+        models.guards(model, t, x, x, False, plus, vals, rates)
+        up = vals[k]
+        models.guards(model, t, x, x, False, minus, vals, rates)
+        guard_rates[j] = (up - vals[k]) / (2.0 * step)
+        after_plus = x.copy()
+        after_minus = x.copy()
+        models.transition(model, k, t, after_plus, values, mode.copy(), plus)
+        models.transition(model, k, t, after_minus, values, mode.copy(), minus)
+        for r in range(n):
+            reset_rates[r, j] = (after_plus[r] - after_minus[r]) / (2.0 * step)
+
+
+@numba.njit(cache=True)
 def saltation(model, k, t, x, values, mode, p, matrix):
     """The model's transition for guard ``k`` at ``t`` [s] (``x`` and ``mode`` updated in
-    place) and its saltation matrix into ``matrix`` (n x n)."""
+    place) and its saltation matrix (eq. 1) into ``matrix`` (n x n). Returns the jump of
+    the field across the event, ``f+ - R_y f-``, divided by the guard's rate before it."""
     n = x.shape[0]
     m = models.guard_count(model)
     f_before = np.empty(n)
@@ -126,22 +220,32 @@ def saltation(model, k, t, x, values, mode, p, matrix):
     models.transition(model, k, t, x, values, mode, p)
     f_after = np.empty(n)
     models.rhs(model, t, x, mode, p, f_after)
-    jump = f_after - reset @ f_before
+    jump = (f_after - reset @ f_before) / rates[k]
     for i in range(n):
         for j in range(n):
-            matrix[i, j] = reset[i, j] + jump[i] * grad[j] / rates[k]
+            matrix[i, j] = reset[i, j] + jump[i] * grad[j]
+    return jump
 
 
 @numba.njit(cache=True)
-def transition(model, k, t, y, values, mode, p):
-    """The model's transition on ``y[:n]`` and ``Phi+ = S Phi-``."""
+def transition(model, count, k, t, y, values, mode, p):
+    """The model's transition on ``y[:n]``, ``Phi+ = S Phi-`` (eq. 1) and each parameter
+    column by eq. (2)."""
     n = models.state_size(model)
+    reset_rates = np.empty((n, count))
+    guard_rates = np.empty(count)
+    if count > 0:
+        _parameter_jumps(model, count, k, t, y[:n].copy(), values, mode, p, reset_rates, guard_rates)
     salt = np.empty((n, n))
-    saltation(model, k, t, y[:n], values, mode, p, salt)
-    phi = y[n:].copy()
-    for i in range(n):
-        for j in range(n):
+    jump = saltation(model, k, t, y[:n], values, mode, p, salt)
+    before = y[n:].copy()
+    for c in range(n + count):
+        column = c if c < n else n * n + (c - n) * n   # offset in ``before`` of column c
+        stride = n if c < n else 1
+        for i in range(n):
             acc = 0.0
             for r in range(n):
-                acc += salt[i, r] * phi[r * n + j]
-            y[n + i * n + j] = acc
+                acc += salt[i, r] * before[column + r * stride]
+            if c >= n:
+                acc += reset_rates[i, c - n] + jump[i] * guard_rates[c - n]
+            y[n + column + i * stride] = acc
