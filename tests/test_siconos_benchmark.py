@@ -210,34 +210,42 @@ def test_the_regimes_over_long_runs_agree(rpm, period, camdyn_runs):
         assert _rotation(counts[:period], settled[:period])
 
 
-def _orbit_errors(rpm, period, section, impacts, run):
-    """Siconos's impacts on its periodic orbit against camdyn's: each matched to camdyn's
-    impact of the same revolution of the period (aligned on the section) nearest in cam
-    angle. Returns the largest angle [rad] and velocity [m/s] differences."""
-    theirs = np.array(run["section"])[run["settled_after_revolutions"]:]
-    shift = int(np.argmin([np.abs((theirs[0] - section[k]) / section.std(axis=0)).max() for k in range(period)]))
-    angle_errors, velocity_errors = [], []
-    ours_by_slot = [impacts[impacts[:, 0] % period == slot] for slot in range(period)]
+def _orbit_velocities(period, section, impacts, run):
+    """Siconos's impacts on its settled periodic orbit matched to camdyn's: each to
+    camdyn's impact of the same revolution of the period (aligned on the section) nearest
+    in cam angle. Returns, per impact of camdyn's orbit, the velocities [m/s] of the
+    Siconos impacts matched to it."""
+    settled = run["settled_after_revolutions"]
+    theirs = np.array(run["section"])[settled:]
+    scale = section.std(axis=0)
+    shift = int(np.argmin([np.abs((theirs[0] - section[k]) / scale).max() for k in range(period)]))
+    orbit = impacts[impacts[:, 0] < period]
+    matched = [[] for _ in orbit]
     found = run["impacts"]
     for turn, angle, velocity in zip(found["revolution"], found["angle_rad"], found["velocity_m_per_s"]):
-        if turn < run["settled_after_revolutions"]:
-            continue
-        ours = ours_by_slot[(turn + shift) % period]
-        k = _nearest(ours[:, 1], angle)
-        angle_errors.append(abs(ours[k, 1] - angle))
-        velocity_errors.append(abs(ours[k, 2] - velocity))
-    return max(angle_errors), max(velocity_errors)
+        if turn >= settled:
+            same = np.flatnonzero(orbit[:, 0] == (turn - settled + shift) % period)
+            matched[same[_nearest(orbit[same, 1], angle)]].append(velocity)
+    return orbit, [np.array(v) for v in matched]
 
 
 @pytest.mark.parametrize("rpm, period", [(358, 3), (700, 1)])
-def test_the_impact_velocities_on_the_periodic_orbits_converge(rpm, period, camdyn_runs):
-    """On the periodic orbits every Siconos impact lies near one of camdyn's, and the
-    largest velocity difference falls as the step is halved twice."""
+def test_the_impact_velocities_on_the_periodic_orbits_agree(rpm, period, camdyn_runs):
+    """Every impact of camdyn's periodic orbit (8 per 3 revolutions at 358 rpm, 5 to 17
+    m/s; 1 per revolution at 700 rpm, 91 m/s) is met once a period by Siconos, whose
+    velocity there, averaged over the settled revolutions, lies within the time
+    stepping's measured accuracy of camdyn's: the spread of that average over the three
+    steps plus its largest excursion from it at the finest step. Its scatter from
+    revolution to revolution falls as the step falls."""
     section, impacts = camdyn_runs[rpm]
-    errors = []
-    for steps in LADDER:
-        run = DATA["speeds"][str(rpm)][str(steps)]
-        angle, velocity = _orbit_errors(rpm, period, section, impacts, run)
-        errors.append(velocity)
-        print(rpm, steps, angle, velocity)
-    assert errors[-1] < errors[0]
+    results = [_orbit_velocities(period, section, impacts, DATA["speeds"][str(rpm)][str(steps)]) for steps in LADDER]
+    orbit = results[0][0]
+    for slot in range(len(orbit)):
+        velocities = [matched[slot] for _, matched in results]
+        for steps, v in zip(LADDER, velocities):
+            run = DATA["speeds"][str(rpm)][str(steps)]
+            assert v.size >= (run["revolutions"] - run["settled_after_revolutions"]) // period - 1
+        means = np.array([v.mean() for v in velocities])
+        accuracy = np.ptp(means) + np.abs(velocities[-1] - means[-1]).max()
+        assert abs(means[-1] - orbit[slot, 2]) <= accuracy
+        assert velocities[-1].std() < velocities[0].std()
