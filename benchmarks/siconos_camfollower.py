@@ -108,8 +108,10 @@ def simulate(rpm, revolutions, steps, z0=0.0, v0=0.0, keep_path=False):
     """Moreau-Jean run from (z0 [m], z'0 [m/s]) at the end of the base dwell: ``steps``
     steps per revolution. Returns the Poincare section (z, z') once per revolution, the
     impacts (time [s], approach velocity z'- [m/s] at the start of the step whose impulse
-    reverses the approach), the least impulse per step / h (the least mean contact force
-    [N] of a step) and, if asked, z and z' at every step."""
+    reverses the approach; approaches slower than half a step's velocity change under
+    eq. (1)'s force are steps of sustained contact, not impacts), the least impulse per
+    step / h (the least mean contact force [N] of a step; 0 once a step needs none) and,
+    if asked, z and z' at every step."""
     omega = rpm * 2.0 * math.pi / 60.0
     period = 2.0 * math.pi / omega
     h = period / steps
