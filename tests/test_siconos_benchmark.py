@@ -6,10 +6,13 @@ by benchmarks/siconos_camfollower.py (``apt-get install python3-siconos``, then
 ``/usr/bin/python3 benchmarks/siconos_camfollower.py``); they come from outside camdyn and
 are the expected values here.
 
-Moreau-Jean time stepping is first order: an impact lands on the step grid, so its time
-is off by up to a step h and its velocity by about h times the relative acceleration.
-The tolerances below come from that and from the ladder of steps (h, h/2, h/4) the JSON
-holds: camdyn's numbers are asserted to be the limit the ladder converges to.
+Moreau-Jean time stepping is first order: an impact lands on the step grid, and in the
+cam's frame the cam's acceleration, a force that jumps at the arcs' joints, is
+integrated by the trapezoidal rule, with an error set by where each jump falls in its
+step. Its errors are therefore first order in size but not steady in the step. The
+tolerances below are Siconos's accuracy as measured on the ladder of steps (h, h/2,
+h/4) the JSON holds: its scatter over the ladder and from revolution to revolution, and
+the regimes are compared with the time stepping's scatter (NOISE) in the section.
 """
 
 import json
