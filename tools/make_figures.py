@@ -16,6 +16,7 @@ Jobs (default: all but the slow ones):
 - ``restitution``: ``python examples/restitution_laws.py`` -> restitution_laws.png;
 - ``mechanisms``: ``python examples/mechanisms.py`` -> mechanisms_speed_fluctuation.png,
   stick_slip_cycle.png;
+- ``flexible_pivot``: ``python examples/flexible_pivot.py`` -> flexible_pivot_resonance.png;
 - slow (``--slow``, about 20 minutes more): ``friction_tables``, ``impact_tables`` and
   ``gallery`` (the rest of chapter 2). These scripts also rewrite their tables in docs/.
 
@@ -60,6 +61,7 @@ SOURCES = {
     "restitution_laws.png": "python examples/restitution_laws.py",
     "mechanisms_speed_fluctuation.png": "python examples/mechanisms.py",
     "stick_slip_cycle.png": "python examples/mechanisms.py",
+    "flexible_pivot_resonance.png": "python examples/flexible_pivot.py",
     "friction_errors.png": "python examples/friction_error_tables.py",
     "impact_hysteresis.png": "python examples/impact_damping_tables.py",
     "impact_residue_landscape.png": "python examples/impact_damping_tables.py",
@@ -202,7 +204,8 @@ JOBS = {"demo": job_demo, "sweeps": job_sweeps, "fig2_9": job_fig2_9,
                              data=True),
         "restitution": job_restitution,
         "mechanisms": _script("mechanisms.py", ("mechanisms_speed_fluctuation.png", "stick_slip_cycle.png"),
-                              data=True)}
+                              data=True),
+        "flexible_pivot": _script("flexible_pivot.py", ("flexible_pivot_resonance.png",), data=True)}
 SLOW = {"friction_tables": _script("friction_error_tables.py", ("friction_errors.png",), data=True),
         "impact_tables": _script("impact_damping_tables.py",
                                  ("impact_hysteresis.png", "impact_residue_landscape.png", "restitution_fit.png")),
