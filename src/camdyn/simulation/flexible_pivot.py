@@ -18,7 +18,7 @@ from camdyn.model import layout as L
 from camdyn.model.outputs import pivot_reaction
 from camdyn.params.system import System
 from camdyn.simulation import limits
-from camdyn.simulation.mechanisms import _run
+from camdyn.simulation.mechanisms import run_mechanism
 from camdyn.simulation.runner import prepare
 from camdyn.systems import registry as systems
 
@@ -219,8 +219,8 @@ def simulate_flexible_pivot(system: System, pivot_stiffness: float, pivot_dampin
             raise ParameterError("the cam is at rest: give a duration in seconds")
         duration = limits.check_number("revolutions", revolutions) * period
     p, y0, prep = flexible_pivot_equilibrium(system, kp, cp)
-    t, y, modes, events, attrs = _run(systems.FLEXIBLE_PIVOT, p, y0, duration, sample_rate, period, rtol, atol,
-                                      method, max_step)
+    t, y, modes, events, attrs = run_mechanism(systems.FLEXIBLE_PIVOT, p, y0, duration, sample_rate, period, rtol,
+                                               atol, method, max_step)
     data = {name: (("time",), y[:, i], {"units": unit, "long_name": long})
             for i, (name, unit, long) in enumerate(PIVOT_STATE)}
     derived = pivot.channels(t, y, modes, p)
