@@ -6,11 +6,11 @@ Generalized coordinates ``q = (alpha [rad], u [m], v [m])``: the follower angle
 (clockwise, as in docs/model.md §1) and the displacement ``P = (u, v)`` of the follower
 pivot from its rest position, where the bearing force vanishes. With ``n = (sin alpha,
 cos alpha)`` and ``u_hat = (cos alpha, -sin alpha)`` the centre of gravity G sits at
-``P + l_cg u_hat`` and moves at ``v_G = P' - l_cg alpha' n``; the kinetic energy is
+``P + l_cg u_hat`` and moves at ``v_G = P' - l_cg alpha' n``; the kinetic energy is::
 
     T = 1/2 m |P'|^2 - m l_cg alpha' n.P' + 1/2 I_P alpha'^2                      (1)
 
-so that Lagrange's equations give the mass matrix and the velocity terms
+so that Lagrange's equations give the mass matrix and the velocity terms::
 
         | I_P               -m l_cg sin(alpha)   -m l_cg cos(alpha) |
     M = | -m l_cg sin(alpha)        m                    0           |            (2)
@@ -19,7 +19,7 @@ so that Lagrange's equations give the mass matrix and the velocity terms
     M q'' = Q + (0, m l_cg alpha'^2 cos(alpha), -m l_cg alpha'^2 sin(alpha))      (3)
 
 (the ``alpha`` row has no velocity term: ``d/dt dT/dalpha' = dT/dalpha`` cancels it).
-Eliminating ``P''`` from (3) leaves Euler's law about G and Newton's law for G:
+Eliminating ``P''`` from (3) leaves Euler's law about G and Newton's law for G::
 
     (I_P - m l_cg^2) alpha'' = Q_alpha + l_cg n.Q_P                               (4)
     P'' = Q_P / m + l_cg (alpha'' n + alpha'^2 u_hat)                             (5)
@@ -37,7 +37,7 @@ Eliminating ``P''`` from (3) leaves Euler's law about G and Newton's law for G:
 The contact geometry is the cam-follower's with the cam pivot at ``E0 - P`` from the
 follower pivot (:func:`camdyn.model.geometry.contact_point_from`); the follower's
 material velocity gains ``P'``, so the penetration rate gains ``+n.P'`` and the sliding
-velocity ``-u_hat.P'``:
+velocity ``-u_hat.P'``::
 
     delta' = -alpha' chi - n.v_cam(Xc) + n.P'                                     (6)
     vr     = u_hat.v_cam(Xc) - alpha' h - u_hat.P'                                (7)
@@ -46,7 +46,7 @@ The spring's ground end is fixed; its follower end moves with the body, so a tra
 ``P`` shortens it along its axis ``d = (sin sigma, cos sigma)`` by ``s = d.P`` [m]. Its
 potential is the rigid pivot's, ``V_r(alpha)`` with ``-V_r' = M_s(alpha)`` the moment of
 eq 3.10 / 4.14 (:func:`camdyn.model.dynamics.spring_moment`), plus the work of that
-shortening against the force ``Fs(alpha)`` of eq 3.10 / 4.44:
+shortening against the force ``Fs(alpha)`` of eq 3.10 / 4.44::
 
     V_s = V_r(alpha) - Fs(alpha) s + 1/2 ks s^2                                   (8)
     Q_alpha = M_s(alpha) + Fs'(alpha) s ,   Q_P = (Fs(alpha) - ks s) d            (9)
@@ -54,7 +54,7 @@ shortening against the force ``Fs(alpha)`` of eq 3.10 / 4.44:
 (9) is the force of the shortened spring, ``Fs - ks s``, along its axis, and the change
 of its moment to first order in ``s`` (at ``alpha = 0``, ``Fs' s = ks dx s``, the lever
 ``dx`` times the change of force); the rigid pivot is ``s = 0`` exactly. Written from a
-potential, the model conserves energy: without damping or friction
+potential, the model conserves energy: without damping or friction::
 
     T + V_s + V_g + 1/2 kp |P|^2 + V_contact - W_cam = const                    (10)
 
