@@ -17,7 +17,8 @@ Jobs (default: all but the slow ones):
 - ``mechanisms``: ``python examples/mechanisms.py`` -> mechanisms_speed_fluctuation.png,
   stick_slip_cycle.png;
 - ``siconos``: ``python examples/siconos_comparison.py`` -> siconos_camfollower.png (from
-  tests/data/siconos_camfollower.json);
+  tests/data/siconos_camfollower.json);,
+- ``flexible_pivot``: ``python examples/flexible_pivot.py`` -> flexible_pivot_resonance.png;
 - slow (``--slow``, about 20 minutes more): ``friction_tables``, ``impact_tables`` and
   ``gallery`` (the rest of chapter 2). These scripts also rewrite their tables in docs/.
 
@@ -63,6 +64,7 @@ SOURCES = {
     "mechanisms_speed_fluctuation.png": "python examples/mechanisms.py",
     "stick_slip_cycle.png": "python examples/mechanisms.py",
     "siconos_camfollower.png": "python examples/siconos_comparison.py",
+    "flexible_pivot_resonance.png": "python examples/flexible_pivot.py",
     "friction_errors.png": "python examples/friction_error_tables.py",
     "impact_hysteresis.png": "python examples/impact_damping_tables.py",
     "impact_residue_landscape.png": "python examples/impact_damping_tables.py",
@@ -206,7 +208,8 @@ JOBS = {"demo": job_demo, "sweeps": job_sweeps, "fig2_9": job_fig2_9,
         "restitution": job_restitution,
         "mechanisms": _script("mechanisms.py", ("mechanisms_speed_fluctuation.png", "stick_slip_cycle.png"),
                               data=True),
-        "siconos": _script("siconos_comparison.py", ("siconos_camfollower.png",), data=True)}
+        "siconos": _script("siconos_comparison.py", ("siconos_camfollower.png",), data=True),
+        "flexible_pivot": _script("flexible_pivot.py", ("flexible_pivot_resonance.png",), data=True)}
 SLOW = {"friction_tables": _script("friction_error_tables.py", ("friction_errors.png",), data=True),
         "impact_tables": _script("impact_damping_tables.py",
                                  ("impact_hysteresis.png", "impact_residue_landscape.png", "restitution_fit.png")),

@@ -22,7 +22,8 @@ from camdyn.errors import GeometryError
 from camdyn.model import layout as L
 
 __all__ = ["cam_angle", "cam_acceleration", "contact_kinematics", "contact_point", "zero_state", "contact_point_rate",
-           "contact_rates_trig", "penetrations", "rigid_angles"]
+           "contact_rates_trig", "penetrations", "rigid_angles", "contact_point_from", "contact_kinematics_from",
+           "contact_rates_from"]
 
 
 @numba.njit(cache=True)
@@ -112,11 +113,19 @@ def contact_point(alpha, theta, p):
 def contact_point_trig(ca, sa, ct, st, p):
     """:func:`contact_point` from ``cos/sin`` of ``alpha`` and ``Theta`` (computed once by
     the right-hand side and shared with the spring and gravity terms)."""
+    return contact_point_from(ca, sa, ct, st, p[L.PIVOT_X], p[L.PIVOT_Y], p)
+
+
+@numba.njit(cache=True, inline="always")
+def contact_point_from(ca, sa, ct, st, ex, ey, p):
+    """:func:`contact_point_trig` with the cam pivot E at ``(ex, ey)`` [m] from the
+    follower pivot instead of ``p``'s ``(PE_x, PE_y)`` (a follower whose pivot moves,
+    :mod:`camdyn.model.flexible_pivot`)."""
     a = p[L.SEMI_A]
     b = p[L.SEMI_B]
     e = p[L.RUNOUT]
-    gx = p[L.PIVOT_X] - e * ct          # centroid Gc = E - e e1
-    gy = p[L.PIVOT_Y] - e * st
+    gx = ex - e * ct          # centroid Gc = E - e e1
+    gy = ey - e * st
     n1 = sa * ct + ca * st              # n . e1
     n2 = -sa * st + ca * ct             # n . e2
     s = math.sqrt(a * a * n1 * n1 + b * b * n2 * n2)
@@ -170,9 +179,16 @@ def contact_kinematics(alpha, alpha_dot, theta, theta_dot, p):
 @numba.njit(cache=True, inline="always")
 def contact_kinematics_trig(ca, sa, ct, st, alpha_dot, theta_dot, p):
     """:func:`contact_kinematics` from ``cos/sin`` of ``alpha`` and ``Theta``."""
-    delta, chi, rho_c, xc, yc = contact_point_trig(ca, sa, ct, st, p)
-    vx = -theta_dot * (yc - p[L.PIVOT_Y])   # v_cam = Theta_dot z x (Xc - E)
-    vy = theta_dot * (xc - p[L.PIVOT_X])
+    return contact_kinematics_from(ca, sa, ct, st, alpha_dot, theta_dot, p[L.PIVOT_X], p[L.PIVOT_Y], p)
+
+
+@numba.njit(cache=True, inline="always")
+def contact_kinematics_from(ca, sa, ct, st, alpha_dot, theta_dot, ex, ey, p):
+    """:func:`contact_kinematics_trig` with the cam pivot E at ``(ex, ey)`` [m] from the
+    follower pivot (:func:`contact_point_from`); the rates are those of a pivot at rest."""
+    delta, chi, rho_c, xc, yc = contact_point_from(ca, sa, ct, st, ex, ey, p)
+    vx = -theta_dot * (yc - ey)   # v_cam = Theta_dot z x (Xc - E)
+    vy = theta_dot * (xc - ex)
     n_v = sa * vx + ca * vy
     u_v = ca * vx - sa * vy
     delta_dot = -alpha_dot * chi - n_v
@@ -220,7 +236,15 @@ def contact_rates_trig(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_d
         ``(delta [m], vr [m/s], delta_dot [m/s], vr_dot [m/s^2], delta_ddot [m/s^2])``;
         the rates are NaN when ``alpha_ddot`` is NaN (unknown).
     """
-    delta, chi, rho_c, xc, yc = contact_point_trig(ca, sa, ct, st, p)
+    return contact_rates_from(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_ddot,
+                              p[L.PIVOT_X], p[L.PIVOT_Y], p)
+
+
+@numba.njit(cache=True, inline="always")
+def contact_rates_from(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_ddot, ex, ey, p):
+    """:func:`contact_rates_trig` with the cam pivot E at ``(ex, ey)`` [m] from the
+    follower pivot (:func:`contact_point_from`); the rates are those of a pivot at rest."""
+    delta, chi, rho_c, xc, yc = contact_point_from(ca, sa, ct, st, ex, ey, p)
     a = p[L.SEMI_A]
     b = p[L.SEMI_B]
     e = p[L.RUNOUT]
@@ -228,8 +252,8 @@ def contact_rates_trig(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_d
     n2 = -sa * st + ca * ct
     s = math.sqrt(a * a * n1 * n1 + b * b * n2 * n2)
     w = e * n1 + s
-    n_e = sa * p[L.PIVOT_X] + ca * p[L.PIVOT_Y]     # n . E
-    u_e = ca * p[L.PIVOT_X] - sa * p[L.PIVOT_Y]     # u . E
+    n_e = sa * ex + ca * ey     # n . E
+    u_e = ca * ex - sa * ey     # u . E
     phi_dot = alpha_dot + theta_dot
     vr = theta_dot * w - alpha_dot * p[L.OFFSET]
     delta_dot = -alpha_dot * chi - theta_dot * (chi - u_e)

@@ -22,7 +22,7 @@ from camdyn.simulation.runner import METHODS, default_max_step, prepare
 from camdyn.systems import registry as systems
 
 __all__ = ["CamDrive", "simulate_driven_cam", "simulate_stick_slip", "speed_fluctuation", "tabulated_motion",
-           "simulate_tabulated"]
+           "simulate_tabulated", "run_mechanism"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -111,8 +111,10 @@ DRIVEN_STATE = (
 )
 
 
-def _run(system_id, p, y0, duration, sample_rate, period, rtol, atol, method, max_step):
-    """:func:`_run_counters` with the counters as the Dataset's attributes."""
+def run_mechanism(system_id, p, y0, duration, sample_rate, period, rtol, atol, method, max_step):
+    """Integrate mechanism ``system_id`` (:func:`_run_counters`: the shared checks and the
+    compiled call) and return the output times [s], states, modes, events and the
+    counters as a Dataset's attributes."""
     t_out, y, modes, events, counters, elapsed = _run_counters(system_id, p, y0, duration, sample_rate, period,
                                                                rtol, atol, method, max_step)
     attrs = {"rtol": rtol, "atol": atol, "method": method, "elapsed_s": elapsed,
@@ -221,8 +223,8 @@ def simulate_driven_cam(system: System, drive: CamDrive, revolutions: float = 5.
                                       "motion.direction": 1 if speed > 0.0 else -1})
         angle = prepare(start).equilibrium.angle
     y0 = np.array([angle, 0.0, prep.theta0, speed, 0.0, 0.0, 0.0, 0.0])
-    t, y, modes, events, attrs = _run(systems.DRIVEN_CAM, p, y0, duration, sample_rate, period, rtol, atol,
-                                      method, max_step)
+    t, y, modes, events, attrs = run_mechanism(systems.DRIVEN_CAM, p, y0, duration, sample_rate, period, rtol,
+                                               atol, method, max_step)
     data = {name: (("time",), y[:, i], {"units": unit, "long_name": long})
             for i, (name, unit, long) in enumerate(DRIVEN_STATE)}
     derived = driven_cam.channels(y, modes, p)
@@ -270,8 +272,8 @@ def simulate_stick_slip(mass: float, stiffness: float, belt_speed: float, static
     if start.shape != (3,) or not np.isfinite(start).all():
         raise ParameterError(f"initial_state must be two finite numbers (x [m], x_dot [m/s]), got {initial_state!r}")
     period = 2.0 * math.pi * math.sqrt(mass / stiffness)
-    t, y, modes, events, attrs = _run(systems.STICK_SLIP, p, start, duration, sample_rate, period, rtol, atol,
-                                      method, None)
+    t, y, modes, events, attrs = run_mechanism(systems.STICK_SLIP, p, start, duration, sample_rate, period, rtol,
+                                               atol, method, None)
     sticking = modes[:, 0] == 0.0
     normal = mass * gravity
     force = np.where(sticking, stiffness * y[:, 0] + damping * y[:, 1], -kinetic_friction * normal * modes[:, 0])

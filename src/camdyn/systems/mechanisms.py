@@ -5,6 +5,8 @@ the first lines of its functions, which have the same meaning as there.
 System 5 is the stick-slip oscillator (:mod:`camdyn.model.stick_slip`, 3 states, 3
 guards) and system 6 the cam-follower with the cam as a rigid body on a driven shaft
 (:mod:`camdyn.model.driven_cam`, 8 states, the cam-follower's 3 guards and modes).
+System 7 is the rocking follower on a flexible pivot bearing
+(:mod:`camdyn.model.flexible_pivot`, 8 states, the cam-follower's 3 guards and modes).
 """
 
 from __future__ import annotations
@@ -12,16 +14,20 @@ from __future__ import annotations
 import numba
 
 from camdyn.model import driven_cam, stick_slip
+from camdyn.model import flexible_pivot as pivot
 from camdyn.model import layout as L
 
 STICK_SLIP = 5
 DRIVEN_CAM = 6
+FLEXIBLE_PIVOT = 7
 
 @numba.njit(cache=True)
 def sizes(system):
     """``(state_size, controlled_size, guard_count, mode_size)`` of a mechanism."""
     if system == STICK_SLIP:
         return stick_slip.STATE_SIZE, 2, stick_slip.GUARD_COUNT, 1
+    if system == FLEXIBLE_PIVOT:
+        return pivot.STATE_SIZE, pivot.CONTROLLED_SIZE, pivot.GUARD_COUNT, L.MODE_SIZE
     return driven_cam.STATE_SIZE, driven_cam.CONTROLLED_SIZE, driven_cam.GUARD_COUNT, L.MODE_SIZE
 
 
@@ -29,6 +35,8 @@ def sizes(system):
 def rhs(system, t, y, mode, p, dydt):
     if system == STICK_SLIP:
         stick_slip.rhs(t, y, mode, p, dydt)
+    elif system == FLEXIBLE_PIVOT:
+        pivot.rhs(t, y, mode, p, dydt)
     else:
         driven_cam.rhs(t, y, mode, p, dydt)
 
@@ -37,6 +45,8 @@ def rhs(system, t, y, mode, p, dydt):
 def jacobian(system, t, y, f0, mode, p, jac):
     if system == STICK_SLIP:
         stick_slip.jacobian(t, y, mode, p, jac)
+    elif system == FLEXIBLE_PIVOT:
+        pivot.jacobian(t, y, mode, p, jac)
     else:
         driven_cam.jacobian(t, y, mode, p, jac)
 
@@ -45,6 +55,8 @@ def jacobian(system, t, y, f0, mode, p, jac):
 def guards(system, t, y, f, known, p, values, rates):
     if system == STICK_SLIP:
         stick_slip.guards(t, y, f, known, p, values, rates)
+    elif system == FLEXIBLE_PIVOT:
+        pivot.guards(t, y, f, known, p, values, rates)
     else:
         driven_cam.guards(t, y, f, known, p, values, rates)
 
@@ -53,6 +65,8 @@ def guards(system, t, y, f, known, p, values, rates):
 def expected_sign(system, k, mode, p):
     if system == STICK_SLIP:
         return stick_slip.expected_sign(k, mode, p)
+    if system == FLEXIBLE_PIVOT:
+        return pivot.expected_sign(k, mode, p)
     return driven_cam.expected_sign(k, mode, p)
 
 
@@ -60,6 +74,8 @@ def expected_sign(system, k, mode, p):
 def transition(system, k, t, y, values, mode, p):
     if system == STICK_SLIP:
         stick_slip.transition(k, t, y, mode, p)
+    elif system == FLEXIBLE_PIVOT:
+        pivot.transition(k, values, mode)
     else:
         driven_cam.transition(k, values, mode)
 
@@ -68,13 +84,16 @@ def transition(system, k, t, y, values, mode, p):
 def initial_mode(system, t, y, p, mode):
     if system == STICK_SLIP:
         stick_slip.initial_mode(t, y, p, mode)
+    elif system == FLEXIBLE_PIVOT:
+        pivot.initial_mode(t, y, p, mode)
     else:
         driven_cam.initial_mode(t, y, p, mode)
 
 
 @numba.njit(cache=True)
 def regime(system, mode, p):
-    """Sticking and slipping (stick-slip), free flight and contact (driven cam)."""
+    """Sticking and slipping (stick-slip), free flight and contact (driven cam, flexible
+    pivot)."""
     if system == STICK_SLIP:
         return 0 if mode[0] == 0.0 else 1
     return 1 if mode[L.MODE_CONTACT] > 0.5 else 0
@@ -82,7 +101,10 @@ def regime(system, mode, p):
 
 @numba.njit(cache=True)
 def monitor(system, t, y, mode, p):
-    """The extension ``|x|`` [m] (stick-slip); an impact's normal force [N] (driven cam)."""
+    """The extension ``|x|`` [m] (stick-slip); an impact's normal force [N] (driven cam,
+    flexible pivot)."""
     if system == STICK_SLIP:
         return abs(y[0])
+    if system == FLEXIBLE_PIVOT:
+        return pivot.monitor(t, y, mode, p)
     return driven_cam.monitor(t, y, mode, p)

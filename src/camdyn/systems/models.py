@@ -30,7 +30,8 @@ and up, are dispatched by :mod:`camdyn.systems.mechanisms`, each function here s
 them there in its first lines: system 5 is the stick-slip oscillator
 (:mod:`camdyn.model.stick_slip`, 3 states, 3 guards) and system 6 the cam-follower with
 the cam as a rigid body on a driven shaft (:mod:`camdyn.model.driven_cam`, 8 states, the
-cam-follower's 3 guards and modes).
+cam-follower's 3 guards and modes); system 7 the rocking follower on a flexible pivot
+bearing (:mod:`camdyn.model.flexible_pivot`, 8 states, the same guards and modes).
 
 A new model gets an id here (or, for a mechanism, in :mod:`camdyn.systems.mechanisms`)
 and a branch in each function; these two modules are the only ones that import the
@@ -57,6 +58,7 @@ TRANSLATING_FOLLOWER = 4
 # --- mechanisms (ids 5 and up; their branches are the blocks marked "mechanisms" below)
 STICK_SLIP = mechanisms.STICK_SLIP
 DRIVEN_CAM = mechanisms.DRIVEN_CAM
+FLEXIBLE_PIVOT = mechanisms.FLEXIBLE_PIVOT
 
 
 @numba.njit(cache=True)

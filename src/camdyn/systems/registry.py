@@ -20,6 +20,7 @@ from camdyn.systems.models import (
     CAM_FOLLOWER,
     COUPLED_OSCILLATORS,
     DRIVEN_CAM,
+    FLEXIBLE_PIVOT,
     OSCILLATOR,
     RIGID_IMPACT,
     STICK_SLIP,
@@ -28,9 +29,8 @@ from camdyn.systems.models import (
 from camdyn.systems.variational import PARAMETRIC, VARIATIONAL
 
 __all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", "TRANSLATING_FOLLOWER", "STICK_SLIP",
-           "DRIVEN_CAM", "VARIATIONAL", "PARAMETRIC", "state_size", "controlled_size", "guard_count", "mode_size",
-           "rhs",
-           "rhs_inline", "jacobian", "guards",
+           "DRIVEN_CAM", "FLEXIBLE_PIVOT", "VARIATIONAL", "PARAMETRIC", "state_size", "controlled_size",
+           "guard_count", "mode_size", "rhs", "rhs_inline", "jacobian", "guards",
            "expected_sign", "transition", "initial_mode", "regime", "preferred_method", "monitor"]
 
 
