@@ -1,9 +1,12 @@
 """Simulation of a translating follower on a cam profile (:mod:`camdyn.model.translating_follower`):
 the parameters, the run through the compiled driver, and the result as an xarray Dataset.
 
-This model is not part of the :class:`~camdyn.params.system.System` and TOML machinery
-(which describes the rocking follower); its parameters are the frozen dataclass
-:class:`TranslatingFollower`, and :func:`alzate_rig` is its one preset.
+This model is not part of the :class:`~camdyn.params.system.System` machinery (which
+describes the rocking follower); its parameters are the frozen dataclass
+:class:`TranslatingFollower`. Its configuration files are read by
+:mod:`camdyn.params.profiles` into a :class:`~camdyn.params.profiles.TranslatingSpec`,
+which :func:`follower_from_spec` turns into a follower; :func:`alzate_rig` is the preset
+``alzate`` written in Python.
 """
 
 from __future__ import annotations
@@ -18,11 +21,19 @@ import xarray as xr
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.integrator import driver
 from camdyn.model import translating_follower as model
-from camdyn.model.profiles import Profile, circular_arc_profile
+from camdyn.model.profiles import (
+    Profile,
+    circular_arc_profile,
+    eccentric_circle,
+    rise_return_profile,
+    tabulated_profile,
+)
+from camdyn.params.profiles import TranslatingSpec
 from camdyn.simulation import limits
 from camdyn.systems import registry as systems
 
-__all__ = ["TranslatingFollower", "simulate_translating", "alzate_rig", "liftoff_speed", "CONTACT_LAWS"]
+__all__ = ["TranslatingFollower", "simulate_translating", "alzate_rig", "liftoff_speed", "follower_from_spec",
+           "CONTACT_LAWS"]
 
 CONTACT_LAWS = {"rigid": model.RIGID, "compliant": model.COMPLIANT}
 
@@ -140,6 +151,46 @@ def alzate_rig(contact="rigid", contact_stiffness=0.0, contact_damping=0.0):
     return TranslatingFollower(profile, mass=1.221, stiffness=stiffness, preload=stiffness * (a["base"] - 0.30),
                                contact=contact, restitution=0.8, contact_stiffness=contact_stiffness,
                                contact_damping=contact_damping, citation=ALZATE_CITATION)
+
+
+def follower_from_spec(spec, lift=None):
+    """The :class:`TranslatingFollower` of a configuration.
+
+    Parameters
+    ----------
+    spec : TranslatingSpec
+        The configuration in SI units (:func:`camdyn.params.profiles.read_translating`).
+    lift : array_like, optional
+        The lift samples [m] at equally spaced cam angles from 0, for a tabulated profile
+        (read from ``spec.file`` by :func:`camdyn.io.lift_table.read_lift_table`).
+
+    Returns
+    -------
+    TranslatingFollower
+        Its profile checked for a cam that can be made (a ``GeometryError`` otherwise).
+    """
+    if not isinstance(spec, TranslatingSpec):
+        raise ParameterError(f"expected a TranslatingSpec, got {type(spec).__name__}")
+    face = {"follower": spec.face, "roller_radius": spec.roller_radius}
+    if spec.profile_kind == "rise-return":
+        profile = rise_return_profile(spec.segments, spec.base_radius, offset=spec.offset, **face)
+    elif spec.profile_kind == "tabulated":
+        if lift is None:
+            raise ParameterError(f"a tabulated profile needs its lift samples (from {spec.file})")
+        profile = tabulated_profile(lift, spec.base_radius, offset=spec.offset, **face)
+    else:
+        if spec.offset != 0.0:
+            raise ParameterError(f"follower.offset: a {spec.profile_kind} cam takes an in-line follower only "
+                                 f"(offset 0), not {spec.offset} m")
+        if spec.profile_kind == "circular-arc":
+            profile = circular_arc_profile(spec.arcs, spec.base_radius, **face)
+        else:
+            profile = eccentric_circle(spec.radius, spec.eccentricity, **face)
+    return TranslatingFollower(profile, mass=spec.mass, stiffness=spec.stiffness, preload=spec.preload,
+                               damping=spec.damping, gravity=spec.gravity, contact=spec.contact,
+                               restitution=spec.restitution, capture_velocity=spec.capture_velocity,
+                               contact_stiffness=spec.contact_stiffness, contact_damping=spec.contact_damping,
+                               citation=spec.citation)
 
 
 def liftoff_speed(follower, samples=200_000):
