@@ -14,38 +14,65 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 
 import numpy as np
 import xarray as xr
 
 from camdyn.errors import ParameterError, SimulationError
+from camdyn.simulation.limits import LargeResultWarning
 from camdyn.simulation.translating import TranslatingFollower, simulate_translating
 
 __all__ = ["poincare_section"]
 
-#: Output samples per revolution of each run [-]; every this-many-th sample is at cam angle 0.
+#: Output samples per revolution of each run [-].
 SAMPLES_PER_REVOLUTION = 64
+#: Most integration steps one revolution may take [-]: a revolution of the Alzate rig
+#: takes about 400 near its lift-off speed and 80 at 750 rpm; a run caught in endless
+#: shrinking steps is stopped at this bound instead of running for minutes.
+STEPS_PER_REVOLUTION = 20_000
+#: Tolerances tried, in order, after the requested one, for a revolution whose run stops.
+FALLBACK_RTOLS = (1e-9, 1e-11, 1e-8, 1e-12)
 
 
 def _check(speeds, transient, revolutions):
     rpm = np.asarray(speeds, dtype=float).reshape(-1)
     if rpm.size == 0 or not np.all(np.isfinite(rpm)) or np.any(rpm <= 0.0):
         raise ParameterError("the cam speeds must be positive and finite [rpm]")
-    for name, value in (("transient", transient), ("revolutions", revolutions)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < (1 if name ==
-                                                                                             "revolutions" else 0):
-            raise ParameterError(f"{name} must be a whole number of revolutions (at least "
-                                 f"{1 if name == 'revolutions' else 0}), got {value!r}")
+    for name, value, least in (("transient", transient, 0), ("revolutions", revolutions, 1)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
+            raise ParameterError(f"{name} must be a whole number of revolutions, at least {least}, got {value!r}")
     return rpm
+
+
+def _revolution(follower, omega, state, rtols):
+    """One revolution from cam angle 0 (the one-revolution map): the run, and the tolerance
+    that completed it; ``(None, message)`` when every tolerance stopped."""
+    message = ""
+    for rtol in rtols:
+        try:
+            with warnings.catch_warnings():   # only the end state is used: 64 samples are plenty
+                warnings.simplefilter("ignore", LargeResultWarning)
+                ds = simulate_translating(follower, omega, 2.0 * math.pi / omega,
+                                          sample_rate=SAMPLES_PER_REVOLUTION * omega / (2.0 * math.pi),
+                                          initial_state=state, rtol=rtol, max_steps=STEPS_PER_REVOLUTION)
+        except SimulationError as exc:
+            message = str(exc)
+            continue
+        return ds, rtol
+    return None, message
 
 
 def poincare_section(follower: TranslatingFollower, speeds, transient: int = 100, revolutions: int = 50,
                      rtol: float = 1e-10) -> xr.Dataset:
     """The follower's state at cam angle 0 of each revolution, for each cam speed.
 
-    Each speed is a separate run from the follower resting on the cam at cam angle 0
-    (``phase`` 0), over ``transient + revolutions`` revolutions; the first ``transient``
-    are dropped.
+    Each speed starts from the follower resting on the cam at cam angle 0 and iterates the
+    one-revolution map: a run of one revolution from cam angle 0, started from the state
+    the previous one ended in. A revolution whose run stops (the rigid contact's event
+    handling can stall where the follower separates at a joint of the profile) is run
+    again at the tolerances of :data:`FALLBACK_RTOLS`; the tolerance that completed each
+    revolution is recorded. The first ``transient`` revolutions are dropped.
 
     Parameters
     ----------
@@ -61,49 +88,51 @@ def poincare_section(follower: TranslatingFollower, speeds, transient: int = 100
     Returns
     -------
     xarray.Dataset
-        ``x`` [m] and ``x_dot`` [m/s] over ``speed_rpm`` and ``revolution``;
+        ``x`` [m], ``x_dot`` [m/s] and ``rtol`` over ``speed_rpm`` and ``revolution``;
         ``impacts_per_revolution``, ``separations_per_revolution`` and ``elapsed_s`` over
-        ``speed_rpm``; ``status``, "ok" or the message of a run that stopped (its points
-        NaN). Attributes: the settings and the total time [s].
+        ``speed_rpm``; ``status``, "ok" or the message of the run that stopped (the
+        points after it NaN). Attributes: the settings and the total time [s].
     """
     rpm = _check(speeds, transient, revolutions)
-    n = SAMPLES_PER_REVOLUTION
-    x = np.full((rpm.size, revolutions), np.nan)
-    v = np.full((rpm.size, revolutions), np.nan)
-    impacts, separations, elapsed = (np.full(rpm.size, np.nan) for _ in range(3))
+    rtols = (rtol,) + tuple(r for r in FALLBACK_RTOLS if r != rtol)
+    shape = (rpm.size, revolutions)
+    x, v, used = np.full(shape, np.nan), np.full(shape, np.nan), np.full(shape, np.nan)
+    impacts, separations, elapsed = np.zeros(rpm.size), np.zeros(rpm.size), np.zeros(rpm.size)
     status = []
     start = time.perf_counter()
     for i, speed in enumerate(rpm):
         omega = speed * 2.0 * math.pi / 60.0
-        rate = omega / (2.0 * math.pi)
-        total = transient + revolutions
         clock = time.perf_counter()
-        try:
-            ds = simulate_translating(follower, omega, (total + 0.5 / n) / rate, sample_rate=n * rate, rtol=rtol)
-        except SimulationError as exc:
-            status.append(str(exc))
-            continue
+        state, message = None, "ok"
+        for k in range(transient + revolutions):
+            ds, tolerance = _revolution(follower, omega, state, rtols)
+            if ds is None:
+                message = f"revolution {k}: {tolerance}"
+                break
+            state = (float(ds["x"].values[-1]), float(ds["x_dot"].values[-1]))
+            if k >= transient:
+                j = k - transient
+                x[i, j], v[i, j], used[i, j] = state[0], state[1], tolerance
+                kinds = ds["event_kind"].values
+                impacts[i] += np.count_nonzero(kinds == "impact")
+                separations[i] += np.count_nonzero(kinds == "separation")
         elapsed[i] = time.perf_counter() - clock
-        status.append("ok")
-        x[i] = ds["x"].values[n * transient:n * total + 1:n][:revolutions]
-        v[i] = ds["x_dot"].values[n * transient:n * total + 1:n][:revolutions]
-        recorded = ds["event_time"].values >= transient / rate
-        kinds = ds["event_kind"].values[recorded]
-        impacts[i] = np.count_nonzero(kinds == "impact") / revolutions
-        separations[i] = np.count_nonzero(kinds == "separation") / revolutions
+        status.append(message)
     coords = {"speed_rpm": ("speed_rpm", rpm, {"units": "rpm", "long_name": "cam speed"}),
               "revolution": ("revolution", np.arange(transient, transient + revolutions),
                              {"units": "1", "long_name": "revolution since the start"})}
     data = {
         "x": (("speed_rpm", "revolution"), x, {"units": "m", "long_name": "follower position at cam angle 0"}),
         "x_dot": (("speed_rpm", "revolution"), v, {"units": "m/s", "long_name": "follower velocity at cam angle 0"}),
-        "impacts_per_revolution": (("speed_rpm",), impacts, {"units": "1", "long_name": "impacts per revolution"}),
-        "separations_per_revolution": (("speed_rpm",), separations,
-                                       {"units": "1", "long_name": "separations per revolution"}),
-        "elapsed_s": (("speed_rpm",), elapsed, {"units": "s", "long_name": "time the run took"}),
-        "status": (("speed_rpm",), np.array(status, dtype=str), {"long_name": "ok, or why the run stopped"}),
+        "rtol": (("speed_rpm", "revolution"), used, {"units": "1", "long_name": "tolerance of the revolution's run"}),
+        "impacts_per_revolution": (("speed_rpm",), impacts / revolutions,
+                                   {"units": "1", "long_name": "impacts per recorded revolution"}),
+        "separations_per_revolution": (("speed_rpm",), separations / revolutions,
+                                       {"units": "1", "long_name": "separations per recorded revolution"}),
+        "elapsed_s": (("speed_rpm",), elapsed, {"units": "s", "long_name": "time the speed's runs took"}),
+        "status": (("speed_rpm",), np.array(status, dtype=str), {"long_name": "ok, or why the runs stopped"}),
     }
     return xr.Dataset(data, coords=coords, attrs={
         "title": "Poincaré section of a translating follower at cam angle 0", "citation": follower.citation,
         "transient_revolutions": int(transient), "recorded_revolutions": int(revolutions), "rtol": float(rtol),
-        "total_elapsed_s": time.perf_counter() - start})
+        "samples_per_revolution": SAMPLES_PER_REVOLUTION, "total_elapsed_s": time.perf_counter() - start})

@@ -229,7 +229,7 @@ def _check_run(speed, duration, sample_rate, rtol, atol):
 
 
 def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0, initial_state=None, rtol=1e-10,
-                         atol=1e-12, max_step=None, max_events=None) -> xr.Dataset:
+                         atol=1e-12, max_step=None, max_events=None, max_steps=50_000_000) -> xr.Dataset:
     """Simulate a translating follower.
 
     Parameters
@@ -252,6 +252,8 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
         Largest step [s]; default 1/64 of the cam period.
     max_events : int, optional
         Room in the event log; default 64 per revolution plus 1000.
+    max_steps : int
+        Largest number of steps; a run that needs more stops with a ``SimulationError``.
 
     Returns
     -------
@@ -292,11 +294,13 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
         raise ParameterError(f"max_step must be a positive number of seconds, got {max_step!r}")
     if not (isinstance(max_events, (int, np.integer)) and max_events > 0):
         raise ParameterError(f"max_events must be a positive whole number, got {max_events!r}")
+    if isinstance(max_steps, bool) or not (isinstance(max_steps, (int, np.integer)) and max_steps > 0):
+        raise ParameterError(f"max_steps must be a positive whole number, got {max_steps!r}")
     t_out = np.minimum(np.arange(n_out) / sample_rate, duration)
     start = _time.perf_counter()
     y, modes, events, counters = driver.integrate(systems.TRANSLATING_FOLLOWER, p, y0, 0.0, float(duration), t_out,
                                                   float(rtol), float(atol), float(max_step), driver.METHOD_AUTO,
-                                                  50_000_000, int(max_events), True)
+                                                  int(max_steps), int(max_events), True)
     elapsed = _time.perf_counter() - start
     status = int(counters[driver.COUNT_STATUS])
     if status == driver.STATUS_INTERRUPTED:
