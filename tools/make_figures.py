@@ -16,8 +16,10 @@ Jobs (default: all but the slow ones):
 - ``restitution``: ``python examples/restitution_laws.py`` -> restitution_laws.png;
 - ``mechanisms``: ``python examples/mechanisms.py`` -> mechanisms_speed_fluctuation.png,
   stick_slip_cycle.png;
-- slow (``--slow``, about 20 minutes more): ``friction_tables``, ``impact_tables`` and
-  ``gallery`` (the rest of chapter 2). These scripts also rewrite their tables in docs/.
+- slow (``--slow``, about 26 minutes more): ``friction_tables``, ``impact_tables``,
+  ``gallery`` (the rest of chapter 2) and ``translating`` (the bifurcation diagram of the
+  translating follower's rig, translating_bifurcation.png). The first three also rewrite
+  their tables in docs/.
 
 ``tribology``, ``friction_tables`` and ``gallery`` record the numbers their figures show
 (``--data``), and restitution_laws.py writes its curves to docs/figures/restitution_laws.json;
@@ -60,6 +62,7 @@ SOURCES = {
     "restitution_laws.png": "python examples/restitution_laws.py",
     "mechanisms_speed_fluctuation.png": "python examples/mechanisms.py",
     "stick_slip_cycle.png": "python examples/mechanisms.py",
+    "translating_bifurcation.png": "python examples/translating_bifurcation.py",
     "friction_errors.png": "python examples/friction_error_tables.py",
     "impact_hysteresis.png": "python examples/impact_damping_tables.py",
     "impact_residue_landscape.png": "python examples/impact_damping_tables.py",
@@ -207,7 +210,8 @@ SLOW = {"friction_tables": _script("friction_error_tables.py", ("friction_errors
         "impact_tables": _script("impact_damping_tables.py",
                                  ("impact_hysteresis.png", "impact_residue_landscape.png", "restitution_fit.png")),
         "gallery": _script("chapter2_gallery.py", tuple(k for k, v in SOURCES.items() if v.endswith("gallery.py")),
-                           ("2.4", "2.7", "2.10", "2.14", "2.16"), data=True)}
+                           ("2.4", "2.7", "2.10", "2.14", "2.16"), data=True),
+        "translating": _script("translating_bifurcation.py", ("translating_bifurcation.png",), data=True)}
 
 
 def sha256(path: Path) -> str:
