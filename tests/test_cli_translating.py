@@ -87,3 +87,9 @@ def test_presets_list_and_show():
     assert status == 0 and "alzate " in out.replace("│", " ")
     status, out, _ = run("presets", "show", "alzate")
     assert status == 0 and 'kind = "translating"' in out
+
+
+def test_a_misspelt_follower_kind_is_named(tmp_path):
+    (tmp_path / "cam.toml").write_text('[follower]\nkind = "translatng"\nmass = "1 kg"\n')
+    status, _, err = run("simulate", tmp_path / "cam.toml")
+    assert status == 2 and "'translatng'" in err and "translating" in err and err.count("\n") == 1, err

@@ -11,13 +11,14 @@ from rich.table import Table
 
 from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, load_source
 from camdyn.cli.outputs import announce, check_outputs, emit_json
+from camdyn.errors import ParameterError
 from camdyn.params.config import (
     SCHEMA,
     list_presets,
     preset_text,
     system_to_toml,
 )
-from camdyn.params.profiles import is_translating, list_translating_presets, translating_preset_text
+from camdyn.params.profiles import declared_kind, is_translating, list_translating_presets, translating_preset_text
 from camdyn.params.units import parse_quantity, parse_speed
 
 
@@ -165,6 +166,9 @@ def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         from camdyn.cli.translating import simulate_translating_command
         simulate_translating_command(source, set_, speed, revolutions, sample_rate, out, plot, method, rtol, json_out)
         return
+    if declared_kind(source) is not None:
+        raise ParameterError(f"{source}: follower.kind is {declared_kind(source)!r}; write 'translating' for a "
+                             "translating follower, or leave it out for the rocking one")
     rtol = 1e-8 if rtol is None else rtol
     system = load_source(source, set_)
     fs = parse_quantity(sample_rate, "Hz", "--sample-rate")

@@ -47,7 +47,7 @@ from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyErro
 from camdyn.params.units import parse_quantity, parse_speed, registry
 
 __all__ = ["SCHEMA", "SEGMENT_KEYS", "ARC_KEYS", "PROFILE_KINDS", "FACES", "CONTACT_LAWS", "TranslatingSpec",
-           "read_translating", "spec_from_table", "is_translating", "list_translating_presets",
+           "read_translating", "spec_from_table", "is_translating", "declared_kind", "list_translating_presets",
            "translating_preset_text"]
 
 #: The follower kind that selects this schema in ``[follower] kind``.
@@ -389,6 +389,18 @@ def _source_text(source: str | Path) -> tuple[str, str, Path | None]:
         raise PresetError(f"{source}: not UTF-8 text; a configuration file is TOML, saved as UTF-8") from None
     except OSError as exc:
         raise PresetError(f"{source}: cannot be read ({exc.strerror or exc})") from None
+
+
+def declared_kind(source: str | Path) -> str | None:
+    """The ``[follower] kind`` a TOML file declares (None without one, or for a file that
+    cannot be read as TOML: the rocking follower's reader reports that)."""
+    path = Path(str(source))
+    try:
+        follower = tomllib.loads(path.read_text(encoding="utf-8")).get("follower", {}) if path.is_file() else {}
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return None
+    kind = follower.get("kind") if isinstance(follower, dict) else None
+    return None if kind is None else str(kind)
 
 
 def is_translating(source: str | Path) -> bool:
