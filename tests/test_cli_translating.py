@@ -93,3 +93,17 @@ def test_a_misspelt_follower_kind_is_named(tmp_path):
     (tmp_path / "cam.toml").write_text('[follower]\nkind = "translatng"\nmass = "1 kg"\n')
     status, _, err = run("simulate", tmp_path / "cam.toml")
     assert status == 2 and "'translatng'" in err and "translating" in err and err.count("\n") == 1, err
+
+
+def test_bifurcation_of_a_translating_follower(tmp_path):
+    out = tmp_path / "section.nc"
+    status, stdout, err = run("bifurcation", "alzate", "--speeds", "100rpm,150rpm", "--revolutions", "5",
+                              "--discard", "3", "--out", out)
+    assert status == 0, err
+    section = xr.load_dataset(out, engine="h5netcdf")
+    assert list(section.speed_rpm.values) == pytest.approx([100.0, 150.0])
+    # below lift-off (114.98 rpm) on the cam; at 150 rpm captured again before cam angle 0
+    np.testing.assert_array_equal(section.x.values, 0.0)
+    assert section.sizes["revolution"] == 2 and (tmp_path / "section.png").is_file()
+    status, _, err = run("bifurcation", "alzate", "--workers", "2", "--out", tmp_path / "other.nc")
+    assert status == 2 and "--workers" in err and err.count("\n") == 1

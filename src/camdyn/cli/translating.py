@@ -15,7 +15,7 @@ from camdyn.errors import ParameterError
 from camdyn.params.config import parse_assignments
 from camdyn.params.units import parse_quantity, parse_speed
 
-__all__ = ["simulate_translating_command", "translating_summary"]
+__all__ = ["simulate_translating_command", "bifurcation_translating_command", "translating_summary"]
 
 #: The tolerance of a translating follower's run when --rtol is not given [-].
 DEFAULT_RTOL = 1e-10
@@ -105,3 +105,38 @@ def simulate_translating_command(source: str, assignments, speed: str | None, re
     if json_out:
         emit_json("simulate-translating", {k: v for k, v in summary.items() if k != "solver"},
                   solver=summary["solver"], files=files)
+
+
+def bifurcation_translating_command(source: str, assignments, speeds: str, revolutions: int, discard: int,
+                                    out: Path, plot: Path | None, workers: int | None, dask: str | None,
+                                    quiet: bool) -> None:
+    """Run ``camdyn bifurcation`` on a translating follower: its Poincaré section at cam
+    angle 0 (:func:`camdyn.analysis.poincare.poincare_section`), one process, written to
+    ``out`` and drawn to ``plot`` (the outputs are checked already)."""
+    from camdyn.analysis.poincare import poincare_section
+    from camdyn.cli.common import parse_grid
+    from camdyn.io.lift_table import load_translating
+    from camdyn.io.netcdf import save_netcdf
+    from camdyn.plotting.translating import plot_poincare_diagram
+    from camdyn.simulation.translating import liftoff_speed
+
+    if workers is not None or dask is not None:
+        raise ParameterError("--workers and --dask: the translating follower's diagram runs in one process")
+    if not 0 <= discard < revolutions:
+        raise ParameterError(f"--discard ({discard}) must be at least 0 and below --revolutions ({revolutions})")
+    follower, spec = load_translating(source, parse_assignments(assignments))
+    rpm = 60.0 * parse_grid(speeds, "--speeds", "Hz")
+    section = poincare_section(follower, rpm, transient=discard, revolutions=revolutions - discard)
+    section.attrs["name"] = spec.name
+    save_netcdf(section, out)
+    announce(out)
+    liftoff = 60.0 * liftoff_speed(follower, samples=20_000) / (2.0 * math.pi)
+    marks = {f"lift-off {liftoff:.5g} rpm": liftoff} if rpm.min() <= liftoff <= rpm.max() else {}
+    figure = plot or out.with_suffix(".png")
+    plot_poincare_diagram(section, figure, marks)
+    announce(figure)
+    if not quiet:
+        stopped = int(np.count_nonzero(section["status"].values != "ok"))
+        console.print(f"{rpm.size} speeds, {discard} + {revolutions - discard} revolutions each: "
+                      f"{section.attrs['total_elapsed_s']:.1f} s; speeds whose runs stopped: {stopped}",
+                      markup=False, highlight=False)
