@@ -17,10 +17,12 @@ Jobs (default: all but the slow ones):
 - ``mechanisms``: ``python examples/mechanisms.py`` -> mechanisms_speed_fluctuation.png,
   stick_slip_cycle.png;
 - ``siconos``: ``python examples/siconos_comparison.py`` -> siconos_camfollower.png (from
-  tests/data/siconos_camfollower.json);,
+  tests/data/siconos_camfollower.json);
 - ``flexible_pivot``: ``python examples/flexible_pivot.py`` -> flexible_pivot_resonance.png;
-- slow (``--slow``, about 20 minutes more): ``friction_tables``, ``impact_tables`` and
-  ``gallery`` (the rest of chapter 2). These scripts also rewrite their tables in docs/.
+- slow (``--slow``, about 26 minutes more): ``friction_tables``, ``impact_tables``,
+  ``gallery`` (the rest of chapter 2) and ``translating`` (the bifurcation diagram of the
+  translating follower's rig, translating_bifurcation.png). The first three also rewrite
+  their tables in docs/.
 
 ``tribology``, ``friction_tables`` and ``gallery`` record the numbers their figures show
 (``--data``), and restitution_laws.py writes its curves to docs/figures/restitution_laws.json;
@@ -65,6 +67,7 @@ SOURCES = {
     "stick_slip_cycle.png": "python examples/mechanisms.py",
     "siconos_camfollower.png": "python examples/siconos_comparison.py",
     "flexible_pivot_resonance.png": "python examples/flexible_pivot.py",
+    "translating_bifurcation.png": "python examples/translating_bifurcation.py",
     "friction_errors.png": "python examples/friction_error_tables.py",
     "impact_hysteresis.png": "python examples/impact_damping_tables.py",
     "impact_residue_landscape.png": "python examples/impact_damping_tables.py",
@@ -214,7 +217,8 @@ SLOW = {"friction_tables": _script("friction_error_tables.py", ("friction_errors
         "impact_tables": _script("impact_damping_tables.py",
                                  ("impact_hysteresis.png", "impact_residue_landscape.png", "restitution_fit.png")),
         "gallery": _script("chapter2_gallery.py", tuple(k for k, v in SOURCES.items() if v.endswith("gallery.py")),
-                           ("2.4", "2.7", "2.10", "2.14", "2.16"), data=True)}
+                           ("2.4", "2.7", "2.10", "2.14", "2.16"), data=True),
+        "translating": _script("translating_bifurcation.py", ("translating_bifurcation.png",), data=True)}
 
 
 def sha256(path: Path) -> str:

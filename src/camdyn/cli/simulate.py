@@ -11,12 +11,14 @@ from rich.table import Table
 
 from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, load_source
 from camdyn.cli.outputs import announce, check_outputs, emit_json
+from camdyn.errors import ParameterError
 from camdyn.params.config import (
     SCHEMA,
     list_presets,
     preset_text,
     system_to_toml,
 )
+from camdyn.params.profiles import declared_kind, is_translating, list_translating_presets, translating_preset_text
 from camdyn.params.units import parse_quantity, parse_speed
 
 
@@ -29,11 +31,17 @@ def presets_list(ctx: typer.Context):
     for name in list_presets():
         meta = tomllib.loads(preset_text(name)).get("preset", {})
         table.add_row(name, meta.get("description", ""))
+    for name in list_translating_presets():
+        meta = tomllib.loads(translating_preset_text(name)).get("preset", {})
+        table.add_row(name, meta.get("description", ""))
     console.print(table)
 
 
 def presets_show(name: str):
     """Print a preset as TOML (copy it to start your own configuration)."""
+    if name in list_translating_presets():
+        typer.echo(translating_preset_text(name))
+        return
     typer.echo(preset_text(name) if name in list_presets() else system_to_toml(load_source(name)))
 
 
@@ -144,12 +152,24 @@ def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              out: Optional[Path] = typer.Option(None, help="Write the results to this netCDF file (.nc)."),
              plot: Optional[Path] = typer.Option(None, help="Write a time-history figure (.png, .pdf, .svg, ...)."),
              method: str = typer.Option("auto", help="auto, explicit or rosenbrock."),
-             rtol: float = typer.Option(1e-8, help="Relative tolerance."),
+             rtol: Optional[float] = typer.Option(None, help="Relative tolerance (default 1e-8; 1e-10 for a "
+                                                            "translating follower)."),
              force: bool = ForceOption,
              json_out: bool = JsonOption):
-    """Simulate the follower and summarise the response."""
+    """Simulate the follower and summarise the response.
+
+    A configuration whose [follower] says kind = "translating" (or the preset alzate) is a
+    translating follower on a cam profile (docs/profiles.md)."""
     from camdyn.simulation.runner import simulate as run
     check_outputs(netcdf=out, figure=plot, force=force)
+    if is_translating(source):
+        from camdyn.cli.translating import simulate_translating_command
+        simulate_translating_command(source, set_, speed, revolutions, sample_rate, out, plot, method, rtol, json_out)
+        return
+    if declared_kind(source) is not None:
+        raise ParameterError(f"{source}: follower.kind is {declared_kind(source)!r}; write 'translating' for a "
+                             "translating follower, or leave it out for the rocking one")
+    rtol = 1e-8 if rtol is None else rtol
     system = load_source(source, set_)
     fs = parse_quantity(sample_rate, "Hz", "--sample-rate")
     if speed is not None:

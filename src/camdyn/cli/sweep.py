@@ -78,12 +78,19 @@ def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                 force: bool = ForceOption,
                 quiet: bool = typer.Option(False, "--quiet", help="No progress bar.")):
     """Bifurcation diagram over cam speed: Poincare samples once per revolution, impacts per
-    revolution, period and regime (a sweep; see 'camdyn sweep' for the general form)."""
+    revolution, period and regime (a sweep; see 'camdyn sweep' for the general form). For a
+    translating follower (preset alzate, or [follower] kind = "translating"): its state at
+    cam angle 0 of each revolution after --discard, in one process (docs/profiles.md)."""
     from camdyn.params.config import parse_assignments
+    from camdyn.params.profiles import is_translating
     from camdyn.plotting import plot_sweep
     from camdyn.sweeps import run_sweep, spec_from_dict
 
     check_outputs(netcdf=out, figure=plot or out.with_suffix(".png"), force=force)
+    if is_translating(source):
+        from camdyn.cli.translating import bifurcation_translating_command
+        bifurcation_translating_command(source, set_, speeds, revolutions, discard, out, plot, workers, dask, quiet)
+        return
     grid = parse_grid(speeds, "--speeds", "Hz")
     table = {"system": {"source": source, "set": parse_assignments(set_)},
              "vary": [{"key": "motion.speed", "values": [float(v) for v in grid]}],

@@ -25,6 +25,7 @@ from pathlib import Path
 
 from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyError
 from camdyn.params.laws import lookup
+from camdyn.params.profiles import list_translating_presets
 from camdyn.params.schema import Parameter, groups, parameter_index, parameters
 from camdyn.params.system import System
 from camdyn.params.units import parse_quantity, parse_speed
@@ -165,9 +166,11 @@ def _arguments(table: str, values: dict) -> dict:
 
 
 def list_presets() -> list[str]:
-    """Names of the bundled presets."""
+    """Names of the bundled presets of the rocking follower (those of the translating
+    follower: :func:`camdyn.params.profiles.list_translating_presets`)."""
     folder = resources.files("camdyn.params.presets")
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+    translating = set(list_translating_presets())
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml") and p.name[:-5] not in translating)
 
 
 def preset_text(name: str) -> str:
@@ -182,6 +185,9 @@ def preset_text(name: str) -> str:
 def read_table(source: str | Path) -> tuple[dict, str, str]:
     """Read a preset name or TOML file path; return (dotted values, name, citation)."""
     path = Path(str(source))
+    if str(source) in list_translating_presets():
+        raise PresetError(f"{str(source)!r} is a preset of the translating follower, not of the rocking one; "
+                          "run it with 'camdyn simulate' or load it with camdyn.io.lift_table.load_translating")
     if str(source) in list_presets():
         text, name = preset_text(str(source)), str(source)
     elif path.suffix == ".toml" or path.exists():

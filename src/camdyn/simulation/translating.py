@@ -1,9 +1,12 @@
 """Simulation of a translating follower on a cam profile (:mod:`camdyn.model.translating_follower`):
 the parameters, the run through the compiled driver, and the result as an xarray Dataset.
 
-This model is not part of the :class:`~camdyn.params.system.System` and TOML machinery
-(which describes the rocking follower); its parameters are the frozen dataclass
-:class:`TranslatingFollower`, and :func:`alzate_rig` is its one preset.
+This model is not part of the :class:`~camdyn.params.system.System` machinery (which
+describes the rocking follower); its parameters are the frozen dataclass
+:class:`TranslatingFollower`. Its configuration files are read by
+:mod:`camdyn.params.profiles` into a :class:`~camdyn.params.profiles.TranslatingSpec`,
+which :func:`follower_from_spec` turns into a follower; :func:`alzate_rig` is the preset
+``alzate`` written in Python.
 """
 
 from __future__ import annotations
@@ -18,11 +21,19 @@ import xarray as xr
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.integrator import driver
 from camdyn.model import translating_follower as model
-from camdyn.model.profiles import Profile, circular_arc_profile
+from camdyn.model.profiles import (
+    Profile,
+    circular_arc_profile,
+    eccentric_circle,
+    rise_return_profile,
+    tabulated_profile,
+)
+from camdyn.params.profiles import TranslatingSpec
 from camdyn.simulation import limits
 from camdyn.systems import registry as systems
 
-__all__ = ["TranslatingFollower", "simulate_translating", "alzate_rig", "liftoff_speed", "CONTACT_LAWS"]
+__all__ = ["TranslatingFollower", "simulate_translating", "alzate_rig", "liftoff_speed", "follower_from_spec",
+           "CONTACT_LAWS"]
 
 CONTACT_LAWS = {"rigid": model.RIGID, "compliant": model.COMPLIANT}
 
@@ -142,6 +153,46 @@ def alzate_rig(contact="rigid", contact_stiffness=0.0, contact_damping=0.0):
                                contact_damping=contact_damping, citation=ALZATE_CITATION)
 
 
+def follower_from_spec(spec, lift=None):
+    """The :class:`TranslatingFollower` of a configuration.
+
+    Parameters
+    ----------
+    spec : TranslatingSpec
+        The configuration in SI units (:func:`camdyn.params.profiles.read_translating`).
+    lift : array_like, optional
+        The lift samples [m] at equally spaced cam angles from 0, for a tabulated profile
+        (read from ``spec.file`` by :func:`camdyn.io.lift_table.read_lift_table`).
+
+    Returns
+    -------
+    TranslatingFollower
+        Its profile checked for a cam that can be made (a ``GeometryError`` otherwise).
+    """
+    if not isinstance(spec, TranslatingSpec):
+        raise ParameterError(f"expected a TranslatingSpec, got {type(spec).__name__}")
+    face = {"follower": spec.face, "roller_radius": spec.roller_radius}
+    if spec.profile_kind == "rise-return":
+        profile = rise_return_profile(spec.segments, spec.base_radius, offset=spec.offset, **face)
+    elif spec.profile_kind == "tabulated":
+        if lift is None:
+            raise ParameterError(f"a tabulated profile needs its lift samples (from {spec.file})")
+        profile = tabulated_profile(lift, spec.base_radius, offset=spec.offset, **face)
+    else:
+        if spec.offset != 0.0:
+            raise ParameterError(f"follower.offset: a {spec.profile_kind} cam takes an in-line follower only "
+                                 f"(offset 0), not {spec.offset} m")
+        if spec.profile_kind == "circular-arc":
+            profile = circular_arc_profile(spec.arcs, spec.base_radius, **face)
+        else:
+            profile = eccentric_circle(spec.radius, spec.eccentricity, **face)
+    return TranslatingFollower(profile, mass=spec.mass, stiffness=spec.stiffness, preload=spec.preload,
+                               damping=spec.damping, gravity=spec.gravity, contact=spec.contact,
+                               restitution=spec.restitution, capture_velocity=spec.capture_velocity,
+                               contact_stiffness=spec.contact_stiffness, contact_damping=spec.contact_damping,
+                               citation=spec.citation)
+
+
 def liftoff_speed(follower, samples=200_000):
     """The lowest cam speed [rad/s] at which a follower held on the cam would need a pull:
     the smallest positive root over the cam angles of the contact force (eq. 3 of
@@ -178,7 +229,7 @@ def _check_run(speed, duration, sample_rate, rtol, atol):
 
 
 def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0, initial_state=None, rtol=1e-10,
-                         atol=1e-12, max_step=None, max_events=None) -> xr.Dataset:
+                         atol=1e-12, max_step=None, max_events=None, max_steps=50_000_000) -> xr.Dataset:
     """Simulate a translating follower.
 
     Parameters
@@ -201,6 +252,8 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
         Largest step [s]; default 1/64 of the cam period.
     max_events : int, optional
         Room in the event log; default 64 per revolution plus 1000.
+    max_steps : int
+        Largest number of steps; a run that needs more stops with a ``SimulationError``.
 
     Returns
     -------
@@ -241,11 +294,13 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
         raise ParameterError(f"max_step must be a positive number of seconds, got {max_step!r}")
     if not (isinstance(max_events, (int, np.integer)) and max_events > 0):
         raise ParameterError(f"max_events must be a positive whole number, got {max_events!r}")
+    if isinstance(max_steps, bool) or not (isinstance(max_steps, (int, np.integer)) and max_steps > 0):
+        raise ParameterError(f"max_steps must be a positive whole number, got {max_steps!r}")
     t_out = np.minimum(np.arange(n_out) / sample_rate, duration)
     start = _time.perf_counter()
     y, modes, events, counters = driver.integrate(systems.TRANSLATING_FOLLOWER, p, y0, 0.0, float(duration), t_out,
                                                   float(rtol), float(atol), float(max_step), driver.METHOD_AUTO,
-                                                  50_000_000, int(max_events), True)
+                                                  int(max_steps), int(max_events), True)
     elapsed = _time.perf_counter() - start
     status = int(counters[driver.COUNT_STATUS])
     if status == driver.STATUS_INTERRUPTED:

@@ -1,0 +1,142 @@
+"""``camdyn simulate`` for a translating follower on a cam profile: the configuration's
+``[follower] kind = "translating"`` (or the preset ``alzate``) sends the command here."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+from rich.table import Table
+
+from camdyn.cli.common import console
+from camdyn.cli.outputs import announce, emit_json
+from camdyn.errors import ParameterError
+from camdyn.params.config import parse_assignments
+from camdyn.params.units import parse_quantity, parse_speed
+
+__all__ = ["simulate_translating_command", "bifurcation_translating_command", "translating_summary"]
+
+#: The tolerance of a translating follower's run when --rtol is not given [-].
+DEFAULT_RTOL = 1e-10
+
+
+def translating_summary(ds, follower) -> dict:
+    """The headline numbers of a translating follower's run (docs/cli-json.md)."""
+    from camdyn.simulation.translating import liftoff_speed
+
+    speed = float(ds.attrs["speed_rad_s"])
+    revolutions = float(ds["time"][-1] - ds["time"][0]) * speed / (2.0 * math.pi)
+    kinds = ds["event_kind"].values
+    count = {kind: int(np.count_nonzero(kinds == kind)) for kind in ("impact", "separation", "capture", "graze",
+                                                                     "contact onset")}
+    impacts = count["impact"] + count["contact onset"]
+    liftoff = liftoff_speed(follower, samples=20_000)
+    return {
+        "preset": ds.attrs.get("name", ""),
+        "speed_rpm": 60.0 * speed / (2.0 * math.pi),
+        "revolutions": revolutions,
+        "contact": ds.attrs["contact"],
+        "impacts": impacts,
+        "impacts_per_revolution": impacts / revolutions if revolutions else 0.0,
+        "separations": count["separation"] if ds.attrs["contact"] == "rigid" else int(
+            np.count_nonzero(kinds == "contact end")),
+        "captures": count["capture"],
+        "contact_force_max_N": float(ds["contact_force"].max()),
+        "gap_max_m": float(ds["gap"].max()),
+        "contact_fraction": float(ds["in_contact"].mean()),
+        "liftoff_speed_rpm": 60.0 * liftoff / (2.0 * math.pi) if math.isfinite(liftoff) else None,
+        "elapsed_s": float(ds.attrs["elapsed_s"]),
+        "solver": {k[7:]: v for k, v in ds.attrs.items() if k.startswith("solver_")},
+    }
+
+
+def _print(out: dict) -> None:
+    table = Table("quantity", "value", title=f"simulation of {out['preset']} (translating follower)")
+    table.add_row("cam speed", f"{out['speed_rpm']:.5g} rpm")
+    table.add_row("revolutions", f"{out['revolutions']:.4g}")
+    table.add_row("contact law", out["contact"])
+    table.add_row("impacts", f"{out['impacts']} ({out['impacts_per_revolution']:.3g} per revolution)")
+    table.add_row("lift-off events (separations)", f"{out['separations']}")
+    table.add_row("captures into sustained contact", f"{out['captures']}")
+    table.add_row("max contact force", f"{out['contact_force_max_N']:.5g} N")
+    table.add_row("max gap (flight height)", f"{out['gap_max_m'] * 1e3:.4g} mm")
+    table.add_row("time in contact", f"{100 * out['contact_fraction']:.1f} %")
+    liftoff = out["liftoff_speed_rpm"]
+    table.add_row("lift-off speed of the cam", "never" if liftoff is None else f"{liftoff:.5g} rpm")
+    s = out["solver"]
+    table.add_row("solver", f"{s['accepted_steps']} steps ({s['rejected_steps']} rejected), {s['events']} events, "
+                            f"{out['elapsed_s'] * 1e3:.1f} ms")
+    console.print(table)
+
+
+def simulate_translating_command(source: str, assignments, speed: str | None, revolutions: float,
+                                 sample_rate: str, out: Path | None, plot: Path | None, method: str,
+                                 rtol: float | None, json_out: bool) -> None:
+    """Run ``camdyn simulate`` on a translating follower (the outputs are checked already)."""
+    from camdyn.io.lift_table import load_translating
+    from camdyn.simulation.translating import simulate_translating
+
+    if method != "auto":
+        raise ParameterError(f"--method {method}: the translating follower is integrated with the automatic "
+                             "method only (leave --method out)")
+    follower, spec = load_translating(source, parse_assignments(assignments))
+    omega = 2.0 * math.pi * parse_speed(speed, "--speed") if speed is not None else spec.speed
+    if omega is None:
+        raise ParameterError(f"{spec.name} gives no cam speed: add motion.speed to the file or pass --speed")
+    if not (isinstance(revolutions, (int, float)) and math.isfinite(revolutions) and revolutions > 0):
+        raise ParameterError(f"--revolutions must be positive, got {revolutions!r}")
+    fs = parse_quantity(sample_rate, "Hz", "--sample-rate")
+    ds = simulate_translating(follower, omega, revolutions * 2.0 * math.pi / omega, sample_rate=fs,
+                              phase=spec.phase, rtol=DEFAULT_RTOL if rtol is None else rtol)
+    ds.attrs["name"] = spec.name
+    summary = translating_summary(ds, follower)
+    if not json_out:
+        _print(summary)
+    files = []
+    if out is not None:
+        from camdyn.io.netcdf import save_netcdf
+        save_netcdf(ds, out)
+        files.append(announce(out, json_out))
+    if plot is not None:
+        from camdyn.plotting.translating import plot_translating_history
+        plot_translating_history(ds, plot)
+        files.append(announce(plot, json_out))
+    if json_out:
+        emit_json("simulate-translating", {k: v for k, v in summary.items() if k != "solver"},
+                  solver=summary["solver"], files=files)
+
+
+def bifurcation_translating_command(source: str, assignments, speeds: str, revolutions: int, discard: int,
+                                    out: Path, plot: Path | None, workers: int | None, dask: str | None,
+                                    quiet: bool) -> None:
+    """Run ``camdyn bifurcation`` on a translating follower: its Poincaré section at cam
+    angle 0 (:func:`camdyn.analysis.poincare.poincare_section`), one process, written to
+    ``out`` and drawn to ``plot`` (the outputs are checked already)."""
+    from camdyn.analysis.poincare import poincare_section
+    from camdyn.cli.common import parse_grid
+    from camdyn.io.lift_table import load_translating
+    from camdyn.io.netcdf import save_netcdf
+    from camdyn.plotting.translating import plot_poincare_diagram
+    from camdyn.simulation.translating import liftoff_speed
+
+    if workers is not None or dask is not None:
+        raise ParameterError("--workers and --dask: the translating follower's diagram runs in one process")
+    if not 0 <= discard < revolutions:
+        raise ParameterError(f"--discard ({discard}) must be at least 0 and below --revolutions ({revolutions})")
+    follower, spec = load_translating(source, parse_assignments(assignments))
+    rpm = 60.0 * parse_grid(speeds, "--speeds", "Hz")
+    section = poincare_section(follower, rpm, transient=discard, revolutions=revolutions - discard)
+    section.attrs["name"] = spec.name
+    save_netcdf(section, out)
+    announce(out)
+    liftoff = 60.0 * liftoff_speed(follower, samples=20_000) / (2.0 * math.pi)
+    marks = {f"lift-off {liftoff:.5g} rpm": liftoff} if rpm.min() <= liftoff <= rpm.max() else {}
+    figure = plot or out.with_suffix(".png")
+    plot_poincare_diagram(section, figure, marks)
+    announce(figure)
+    if not quiet:
+        stopped = int(np.count_nonzero(section["status"].values != "ok"))
+        console.print(f"{rpm.size} speeds, {discard} + {revolutions - discard} revolutions each: "
+                      f"{section.attrs['total_elapsed_s']:.1f} s; speeds whose runs stopped: {stopped}",
+                      markup=False, highlight=False)
