@@ -21,7 +21,11 @@ by the secant method (Illinois variant) along the arclength (Seydel 2010, sec. 5
   circle; a real pair with product 1, a neutral saddle, is discarded after location);
 * grazing: the number of impacts per period changes (located by bisection, as the
   orbit's topology changes there: Di Bernardo et al. 2008, *Piecewise-smooth Dynamical
-  Systems*, ch. 8).
+  Systems*, ch. 8);
+* contact loss (the cam-follower): the smallest normal force over the orbit, unclipped
+  (``min Fn = 0``; :mod:`.margins`);
+* sliding reversal (the cam-follower): the smallest sliding velocity in contact, signed
+  by the direction of sliding (``min s vr = 0``; :mod:`.margins`).
 """
 
 from __future__ import annotations
@@ -42,7 +46,9 @@ MIN_STEP = 1e-6
 __all__ = ["Bifurcation", "Branch", "continue_orbits", "KINDS"]
 
 #: The bifurcations detected, as named in results.
-KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing")
+KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing", "contact-loss", "sliding-reversal")
+#: The kinds located by the sign change of a smooth test function.
+_SMOOTH = ("fold", "period-doubling", "neimark-sacker", "contact-loss", "sliding-reversal")
 
 
 @dataclass(frozen=True)
@@ -178,7 +184,9 @@ def _tests(point: _Point) -> dict:
     pairs = [mu[i] * mu[j] - 1.0 for i in range(mu.size) for j in range(i + 1, mu.size)]
     return {"fold": float(point.tangent[-1]),
             "period-doubling": float(np.real(np.prod(mu + 1.0))),
-            "neimark-sacker": float(np.real(np.prod(pairs))) if pairs else 1.0}
+            "neimark-sacker": float(np.real(np.prod(pairs))) if pairs else 1.0,
+            "contact-loss": point.orbit.force_minimum,
+            "sliding-reversal": point.orbit.sliding_minimum}
 
 
 def _locate(job: _Continuation, a: _Point, b: _Point, kind: str, max_iterations: int = 60) -> _Point | None:
@@ -232,8 +240,8 @@ def _locate(job: _Continuation, a: _Point, b: _Point, kind: str, max_iterations:
 def _detect(job: _Continuation, a: _Point, b: _Point) -> list[Bifurcation]:
     found = []
     before, after = _tests(a), _tests(b)
-    for kind in ("fold", "period-doubling", "neimark-sacker"):
-        if before[kind] * after[kind] < 0:
+    for kind in _SMOOTH:
+        if before[kind] * after[kind] < 0:                       # False for NaN (a test model)
             point = _locate(job, a, b, kind)
             if point is not None:
                 found.append(Bifurcation(kind, point.orbit.parameter, point.orbit))

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from camdyn.continuation.margins import contact_margins
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.integrator import driver
@@ -54,6 +55,8 @@ class Flow:
         Sampled full states over the run, at ``times`` [s].
     times : ndarray (samples,)
         Sample times [s].
+    modes : ndarray (samples, mode size)
+        The hybrid mode at each sample.
     """
 
     end: np.ndarray
@@ -63,6 +66,7 @@ class Flow:
     guard_minimum: float
     states: np.ndarray
     times: np.ndarray
+    modes: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -96,6 +100,12 @@ class Orbit:
         Smallest sampled value of the contact guard over the orbit.
     monodromy : ndarray (u, u)
         The monodromy matrix.
+    force_minimum : float
+        The cam-follower's smallest normal force over the orbit, unclipped [N]
+        (:func:`~camdyn.continuation.margins.contact_margins`; NaN for a test model).
+    sliding_minimum : float
+        The cam-follower's smallest sliding velocity in contact, signed by the direction
+        of sliding [m/s] (NaN for a test model).
     """
 
     state: np.ndarray
@@ -110,6 +120,8 @@ class Orbit:
     residual: float
     guard_minimum: float
     monodromy: np.ndarray
+    force_minimum: float = math.nan
+    sliding_minimum: float = math.nan
 
 
 def _full(problem: Problem, x: np.ndarray) -> np.ndarray:
@@ -132,7 +144,7 @@ def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samp
     count = max(samples, 2)
     times = np.linspace(t0, t1, count)
     start = np.concatenate([y0, np.eye(n).ravel()])
-    y, _, log, counters = driver.integrate(systems.VARIATIONAL + problem.system_id, p, start, t0, t1, times,
+    y, modes, log, counters = driver.integrate(systems.VARIATIONAL + problem.system_id, p, start, t0, t1, times,
                                            problem.rtol, problem.atol, period / 32.0, driver.METHOD_DOP853,
                                            50_000_000, 100_000, True)
     status = int(counters[driver.COUNT_STATUS])
@@ -148,7 +160,7 @@ def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samp
     states = y[:, :n]
     matrix = y[-1, n:].reshape(n, n)[:u, :u].copy()
     return Flow(y[-1, :u].copy(), matrix, int(on_contact.sum()), int(counters[driver.COUNT_EVENTS]),
-                _guard_minimum(problem.system_id, p, times, states) if samples else math.nan, states, times)
+                _guard_minimum(problem.system_id, p, times, states) if samples else math.nan, states, times, modes)
 
 
 def _guard_minimum(system_id: int, p: np.ndarray, times: np.ndarray, states: np.ndarray) -> float:
@@ -213,10 +225,11 @@ def make_orbit(problem: Problem, x, value, periods, run: Flow, iterations, resid
     over ``periods`` forcing periods (sampled, for the guard's minimum)."""
     values = np.linalg.eigvals(run.matrix)
     values = values[np.argsort(-np.abs(values), kind="stable")]
-    _, period = problem.build(value)
+    p, period = problem.build(value)
+    force, sliding = contact_margins(problem.system_id, p, run.times, run.states, run.modes)
     return Orbit(np.asarray(x, float).copy(), _full(problem, x), float(value), float(periods * period), periods, values,
                  bool(np.all(np.abs(values) < 1.0 - STABILITY_MARGIN)), run.impacts, iterations, residual,
-                 run.guard_minimum, run.matrix)
+                 run.guard_minimum, run.matrix, force, sliding)
 
 
 def find_orbit(problem: Problem, start=None, value: float | None = None, periods: int = 1, tolerance: float = 1e-10,
