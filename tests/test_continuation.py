@@ -272,7 +272,7 @@ def test_continue_cli_refuses_bad_input_in_one_line(args, words, capsys):
 
 def test_cam_follower_branch_loses_contact_at_the_inverse_kinematics_speed():
     import camdyn
-    from camdyn.analysis.kinematics import loss_of_contact_speed
+    from camdyn.analysis.kinematics import inverse_kinematics, loss_of_contact_speed
     from camdyn.continuation.results import trace_branch
     system = camdyn.load_system("sundar2014-friction")                  # e/a = 0.1
     # rigid contact: the lowest speed at which the cam's motion needs a pulling force
@@ -284,6 +284,22 @@ def test_cam_follower_branch_loses_contact_at_the_inverse_kinematics_speed():
     # the rigid-contact kinematics leave out the Hertz contact's compliance and the follower's
     # dynamic response, of relative order (f / f_n)^2 = (18 Hz / 961 Hz)^2 = 4e-4
     assert abs(grazing[0].parameter - expected) < 2e-3 * expected, (grazing[0].parameter, expected)
+    # min Fn = 0 is located too (measured 7.8e-4 below the kinematics), before the gap opens
+    loss = [b for b in branch.bifurcations if b.kind == "contact-loss"]
+    assert len(loss) == 1 and abs(loss[0].parameter - expected) < 2e-3 * expected, (loss, expected)
+    assert loss[0].parameter <= grazing[0].parameter and abs(loss[0].orbit.force_minimum) < 1e-6
+    # the test functions are the orbit's smallest Fn and vr: a simulation of the first orbit
+    # (dense samples, its own output code) gives the same; the rigid kinematics' vr is
+    # Omega (w - alpha_k' h) > 0 at every speed, so sliding never reverses on this branch
+    orbit = branch.orbits[0]
+    one = camdyn.simulate(system.with_values(**{"motion.speed": orbit.parameter}), revolutions=1,
+                          initial_state=orbit.state, rtol=1e-10, atol=1e-12, sample_rate=4096 * orbit.parameter,
+                          variables=["Fn", "sliding_velocity"])
+    assert orbit.force_minimum == pytest.approx(float(one["Fn"].min()), rel=1e-5)
+    assert orbit.sliding_minimum == pytest.approx(float(one["sliding_velocity"].min()), rel=1e-6)
+    kinematic = inverse_kinematics(system, speed=orbit.parameter)["sliding_velocity"]
+    assert orbit.sliding_minimum == pytest.approx(float(kinematic.min()), rel=1e-5)      # measured 1e-7
+    assert "sliding-reversal" not in [b.kind for b in branch.bifurcations]
 
 
 def test_branch_figure_draws_unstable_dashed_and_is_readable(tmp_path, monkeypatch):
