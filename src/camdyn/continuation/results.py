@@ -11,12 +11,14 @@ import numpy as np
 import xarray as xr
 
 from camdyn.continuation.branches import MIN_STEP, Branch, continue_orbits
-from camdyn.continuation.orbits import Orbit, find_orbit
+from camdyn.continuation.orbits import Orbit, find_orbit, shoot
 from camdyn.continuation.problem import Problem, system_problem
-from camdyn.errors import ParameterError
+from camdyn.continuation.switching import switch_branch
+from camdyn.errors import CamdynError, ParameterError
 from camdyn.params.system import System
 
-__all__ = ["trace_branch", "orbit_record", "branch_records", "bifurcation_records", "branches_dataset"]
+__all__ = ["trace_branch", "switch_doublings", "orbit_record", "branch_records", "bifurcation_records",
+           "branches_dataset"]
 
 
 def trace_branch(system: System, key: str, start: float, stop: float, periods: int = 1, step: float = 0.02,
@@ -48,11 +50,51 @@ def trace_branch(system: System, key: str, start: float, stop: float, periods: i
     return problem, branch
 
 
+def switch_doublings(problem: Problem, branch: Branch, stop: float, levels: int = 1, step: float = 0.02,
+                     max_points: int = 200, progress: Callable[[Orbit], None] | None = None) -> list[Branch]:
+    """The period-doubled branches born on ``branch``: at each of its period doublings the
+    period-``2k`` branch (:func:`~camdyn.continuation.switching.switch_branch`) continued
+    towards ``stop``, and on those their own doublings, down to ``levels`` doublings
+    (1: the period-2 branches only). A doubling whose switch fails (the corrector does
+    not converge next to it) is skipped. Returns the new branches, parents first."""
+    if int(levels) != levels or levels < 0:
+        raise ParameterError(f"the number of doublings to follow must be a whole number >= 0, got {levels}")
+    found, parents = [], [branch]
+    for _ in range(int(levels)):
+        children = []
+        for parent in parents:
+            for item in parent.bifurcations:
+                if item.kind != "period-doubling":
+                    continue
+                try:
+                    children.append(switch_branch(problem, item, stop, step=step, max_step=max(step, 0.1),
+                                                  max_points=max_points, progress=progress))
+                except CamdynError:
+                    continue
+        found.extend(children)
+        parents = children
+    return found
+
+
+def _sections(problem: Problem, orbit: Orbit) -> list[float]:
+    """The first unknown (the follower angle alpha [rad]) at each forcing period of the
+    orbit: its ``k`` points on the stroboscopic Poincare section."""
+    x, points = orbit.state, [float(orbit.state[0])]
+    for _ in range(orbit.periods - 1):
+        x = shoot(problem, x, orbit.parameter, 1)
+        points.append(float(x[0]))
+    return points
+
+
 def orbit_record(problem: Problem, orbit: Orbit) -> dict:
     """One orbit as a record: ``parameter`` [SI], ``stable``, ``multipliers`` ([re, im]
-    pairs), ``period`` [s], ``impacts_per_period``, ``max_normal_force`` [N] and
-    ``max_penetration`` [m] over the orbit (from a simulation of one orbit period from
-    its state; NaN for a test model), ``state`` (the unknowns at the phase ``t_start``)."""
+    pairs), ``period`` [s], ``periods`` (forcing periods per orbit period),
+    ``impacts_per_period``, ``max_normal_force`` [N] and ``max_penetration`` [m] over the
+    orbit (from a simulation of one orbit period from its state; NaN for a test model),
+    ``min_normal_force`` [N] and ``min_sliding_velocity`` [m/s] (the contact-loss and
+    sliding-reversal test functions; NaN for a test model), ``state`` (the unknowns at
+    the phase ``t_start``) and ``poincare`` (the first unknown at each of the orbit's
+    forcing periods: its points on the stroboscopic section)."""
     force = penetration = math.nan
     if problem.system is not None:
         from camdyn.simulation.runner import simulate
@@ -63,8 +105,15 @@ def orbit_record(problem: Problem, orbit: Orbit) -> dict:
         force, penetration = float(ds["Fn"].max()), float(ds["penetration"].max())
     return {"parameter": orbit.parameter, "stable": orbit.stable,
             "multipliers": [[float(m.real), float(m.imag)] for m in orbit.multipliers], "period": orbit.period,
-            "impacts_per_period": orbit.impacts_per_period, "max_normal_force": force,
-            "max_penetration": penetration, "state": [float(v) for v in orbit.state]}
+            "periods": orbit.periods, "impacts_per_period": orbit.impacts_per_period, "max_normal_force": force,
+            "max_penetration": penetration, "min_normal_force": _finite(orbit.force_minimum),
+            "min_sliding_velocity": _finite(orbit.sliding_minimum), "state": [float(v) for v in orbit.state],
+            "poincare": _sections(problem, orbit)}
+
+
+def _finite(value: float) -> float | None:
+    """``value``, or None (JSON null) where it is NaN."""
+    return float(value) if math.isfinite(value) else None
 
 
 def branch_records(problem: Problem, branch: Branch) -> list[dict]:
