@@ -233,7 +233,7 @@ def test_continue_cli_json_netcdf_and_figure(tmp_path, capsys):
     from camdyn.cli.app import main
     out, plot = tmp_path / "branch.nc", tmp_path / "branch.png"
     args = ["continue", "sundar2014-friction", "--set", "cam.runout=0.875mm", "--from", "11Hz", "--to", "11.6Hz",
-            "--transient", "5", "--out", str(out), "--plot", str(plot), "--json"]
+            "--transient", "5", "--out", str(out), "--plot", str(plot), "--json", "--brute-force", "3"]
     assert main(args) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["schema"] == "camdyn.continue/1"
@@ -259,6 +259,8 @@ def test_continue_cli_json_netcdf_and_figure(tmp_path, capsys):
     (["--from", "11Hz", "--to", "12Hz", "--out", "branch.txt"], ".nc"),
     (["--parameter", "cam.runout", "--from", "1.2", "--to", "1.4mm"], "has no unit"),
     (["--from", "11Hz", "--to", "12Hz", "--step", "1e-9"], "step at least"),
+    (["--from", "11Hz", "--to", "12Hz", "--brute-force", "20"], "give --plot"),
+    (["--from", "11Hz", "--to", "12Hz", "--doublings", "-1"], "--doublings"),
     (["--from", "11Hz", "--to", "12Hz", "--set", "motion.kind=ramp", "--set", "motion.ramp_time=1s"], "ramp"),
     (["--from", "11Hz", "--to", "12Hz", "--set", "motion.kind=oscillating", "--set", "motion.frequency=5Hz",
       "--set", "motion.amplitude=0.1"], "motion.frequency"),
@@ -303,6 +305,8 @@ def test_cam_follower_branch_loses_contact_at_the_inverse_kinematics_speed():
 
 
 def test_branch_figure_draws_unstable_dashed_and_is_readable(tmp_path, monkeypatch):
+    import xarray as xr
+
     from camdyn.continuation.results import branches_dataset
     from camdyn.plotting import layout_problems, style
     from camdyn.plotting.branches import plot_branches
@@ -311,7 +315,8 @@ def test_branch_figure_draws_unstable_dashed_and_is_readable(tmp_path, monkeypat
     def hook(fig):
         styles = {(line.get_linestyle(), round(float(np.mean(line.get_xdata())), 3))
                   for line in fig.axes[0].get_lines()}
-        seen.append((layout_problems(fig), styles, fig.axes[1].get_xlabel()))
+        dots = [line for line in fig.axes[0].get_lines() if line.get_marker() == "."]
+        seen.append((layout_problems(fig), styles, fig.axes[-1].get_xlabel(), dots))
     monkeypatch.setattr(style, "SAVE_HOOKS", [hook])
     speeds = np.linspace(10.0, 20.0, 11)
     records = [[{"parameter": s, "stable": s < 15.0, "multipliers": [[-0.1 * s / 1.5, 0.0], [0.01, 0.0]],
@@ -323,8 +328,17 @@ def test_branch_figure_draws_unstable_dashed_and_is_readable(tmp_path, monkeypat
     assert ds["max_normal_force"].attrs["units"] == "N"
     assert ds["bifurcation_kind"].values.tolist() == ["period-doubling"]
     plot_branches(ds, tmp_path / "branch.png")
-    problems, styles, xlabel = seen[0]
+    problems, styles, xlabel, dots = seen[0]
     assert problems == [], problems
     # stable 10-14 Hz solid (mean 12); unstable 15-20 Hz dashed, joined to the last stable point (mean 17)
     assert ("-", 12.0) in styles and ("--", 17.0) in styles, styles
-    assert "Hz" in xlabel
+    assert "Hz" in xlabel and dots == []
+    # over a brute-force diagram: its Poincare points drawn as dots, in degrees like the branches
+    diagram = xr.Dataset({"poincare_alpha": (("motion.speed", "revolution"), np.full((6, 3), 0.07),
+                                             {"units": "rad"})},
+                         coords={"motion.speed": ("motion.speed", np.linspace(10.0, 20.0, 6), {"units": "Hz"})})
+    plot_branches(ds, tmp_path / "overlay.png", diagram)
+    problems, styles, _, dots = seen[1]
+    assert problems == [] and ("-", 12.0) in styles and len(dots) == 1, (problems, styles)
+    np.testing.assert_allclose(dots[0].get_ydata(), math.degrees(0.07))
+    np.testing.assert_allclose(dots[0].get_xdata(), np.repeat(np.linspace(10.0, 20.0, 6), 3))

@@ -130,8 +130,9 @@ def bifurcation_records(branches: list[Branch]) -> list[dict]:
 
 def branches_dataset(problem: Problem, records: list[list[dict]], bifurcations: list[dict]) -> xr.Dataset:
     """The branches as a Dataset over ``point`` (all branches one after the other, with
-    their index in ``branch``), ``multiplier`` and ``bifurcation``; every variable carries
-    ``units`` and ``long_name``."""
+    their index in ``branch``), ``multiplier``, ``section`` (an orbit's Poincare points,
+    NaN past its ``periods``) and ``bifurcation``; every variable carries ``units`` and
+    ``long_name``."""
     points = [r for branch in records for r in branch]
     if not points:
         raise ParameterError("no orbit to store")
@@ -141,8 +142,13 @@ def branches_dataset(problem: Problem, records: list[list[dict]], bifurcations: 
         mu[i, :len(r["multipliers"])] = [complex(a, b) for a, b in r["multipliers"]]
     unit = problem.unit or "1"
 
-    def column(name, dtype=float):
-        return np.array([r[name] for r in points], dtype=dtype)
+    def column(name, dtype=float, default=math.nan):
+        return np.array([default if r.get(name) is None else r[name] for r in points], dtype=dtype)
+
+    sections = [r.get("poincare") or [r["state"][0]] for r in points]
+    poincare = np.full((len(points), max(len(v) for v in sections)), np.nan)
+    for i, values in enumerate(sections):
+        poincare[i, :len(values)] = values
 
     data = {
         "parameter": ("point", column("parameter"), {"units": unit, "long_name": problem.name}),
@@ -150,6 +156,15 @@ def branches_dataset(problem: Problem, records: list[list[dict]], bifurcations: 
                    {"units": "1", "long_name": "branch index"}),
         "stable": ("point", column("stable", np.int8), {"units": "1", "long_name": "1 if every |multiplier| < 1"}),
         "period": ("point", column("period"), {"units": "s", "long_name": "orbit period"}),
+        "periods": ("point", column("periods", np.int32, 1),
+                    {"units": "1", "long_name": "forcing periods per orbit period"}),
+        "min_normal_force": ("point", column("min_normal_force"),
+                             {"units": "N", "long_name": "smallest Fn over the orbit, unclipped"}),
+        "min_sliding_velocity": ("point", column("min_sliding_velocity"),
+                                 {"units": "m/s", "long_name": "smallest sliding velocity in contact, signed by "
+                                                              "the direction of sliding"}),
+        "poincare_alpha": (("point", "section"), poincare,
+                           {"units": "rad", "long_name": "follower angle once per forcing period (Poincare points)"}),
         "impacts_per_period": ("point", column("impacts_per_period", np.int32),
                                {"units": "1", "long_name": "impacts per orbit period"}),
         "max_normal_force": ("point", column("max_normal_force"), {"units": "N", "long_name": "largest Fn"}),
@@ -164,7 +179,8 @@ def branches_dataset(problem: Problem, records: list[list[dict]], bifurcations: 
         "multiplier_imag": (("point", "multiplier"), mu.imag,
                             {"units": "1", "long_name": "Floquet multiplier, imaginary part"}),
         "bifurcation_kind": ("bifurcation", np.array([b["kind"] for b in bifurcations], dtype=str),
-                             {"units": "1", "long_name": "fold, period-doubling, neimark-sacker or grazing"}),
+                             {"units": "1", "long_name": "fold, period-doubling, neimark-sacker, grazing, "
+                                                          "contact-loss or sliding-reversal"}),
         "bifurcation_parameter": ("bifurcation", np.array([b["parameter"] for b in bifurcations], dtype=float),
                                   {"units": unit, "long_name": f"{problem.name} at the bifurcation"}),
         "bifurcation_branch": ("bifurcation", np.array([b["branch"] for b in bifurcations], dtype=np.int32),
