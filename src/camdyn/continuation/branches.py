@@ -118,9 +118,11 @@ class _Continuation:
         x, value = self.unscale(z)
         return (shoot(self.problem, x, value, self.periods) - x) / self.scales[:-1]
 
-    def linearization(self, z: np.ndarray) -> tuple[Flow, np.ndarray]:
-        """The variational run at scaled ``z`` (sampled) and the scaled Jacobian
-        ``[M - I, G_lambda]`` there (``G_lambda`` by central differences)."""
+    def linearization(self, z: np.ndarray) -> tuple[Flow, np.ndarray, np.ndarray]:
+        """The variational run at scaled ``z`` (sampled), the scaled Jacobian
+        ``[M - I, G_lambda]`` there (``G_lambda`` by central differences) and an
+        estimate of the scaled residual (the mean of the two differenced runs, exact to
+        ``O(h^2)``: what the orbit reports, never what Newton's method solves)."""
         x, value = self.unscale(z)
         run = flow(self.problem, x, value, self.periods, SAMPLES_PER_PERIOD * self.periods)
         h = 1e-6 * self.scales[-1]
@@ -130,14 +132,15 @@ class _Continuation:
         jac[:, :-1] = run.matrix - np.eye(self.u)
         jac[:, -1] = (plus - minus) / (2.0 * h)                        # central difference
         sx = self.scales[:-1]
-        return run, jac * self.scales[None, :] / sx[:, None]
+        return run, jac * self.scales[None, :] / sx[:, None], (0.5 * (plus + minus) - x) / sx
 
     def point(self, z: np.ndarray, previous: np.ndarray, iterations: int) -> _Point:
         """The converged point at ``z``: its orbit (monodromy and multipliers from the
         variational run), its Jacobian and the tangent oriented along ``previous``."""
-        run, jac = self.linearization(z)
+        run, jac, residual = self.linearization(z)
         x, value = self.unscale(z)
-        orbit = make_orbit(self.problem, x, value, self.periods, run, iterations, float(np.linalg.norm(run.end - x)))
+        orbit = make_orbit(self.problem, x, value, self.periods, run, iterations,
+                           float(np.linalg.norm(residual * self.scales[:-1])))
         vector = np.linalg.svd(jac)[2][-1]                               # the null vector
         return _Point(z, vector if vector @ previous >= 0 else -vector, orbit, iterations, jac)
 
@@ -159,9 +162,8 @@ class _Continuation:
         last = math.inf
         for iteration in range(1, self.max_corrections + 1):
             if jac is None:
-                run, fresh = self.linearization(z)
-                x, _ = self.unscale(z)
-                residual = (run.end - x) / self.scales[:-1]
+                _, fresh, _ = self.linearization(z)
+                residual = self.residual(z)
                 full = np.vstack([fresh, direction])
             else:
                 residual = self.residual(z)

@@ -132,8 +132,10 @@ def _full(problem: Problem, x: np.ndarray) -> np.ndarray:
 
 def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samples: int = 0) -> Flow:
     """Integrate the variational system from unknowns ``x`` at ``t_start`` over
-    ``periods`` forcing periods at the scalar parameter ``value`` (default the problem's).
-    Raises :class:`SimulationError` if the integrator stops."""
+    ``periods`` forcing periods at the scalar parameter ``value`` (default the problem's),
+    at the problem's matrix tolerances (:meth:`Problem.matrix_tolerances`; its end state
+    is only as accurate as those: residuals come from :func:`shoot`). Raises
+    :class:`SimulationError` if the integrator stops."""
     value = problem.value if value is None else float(value)
     p, period = problem.build(value)
     n = problem.template.size
@@ -144,8 +146,9 @@ def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samp
     count = max(samples, 2)
     times = np.linspace(t0, t1, count)
     start = np.concatenate([y0, np.eye(n).ravel()])
+    rtol, atol = problem.matrix_tolerances()
     y, modes, log, counters = driver.integrate(systems.VARIATIONAL + problem.system_id, p, start, t0, t1, times,
-                                           problem.rtol, problem.atol, period / 32.0, driver.METHOD_DOP853,
+                                           rtol, atol, period / 32.0, driver.METHOD_DOP853,
                                            50_000_000, 100_000, True)
     status = int(counters[driver.COUNT_STATUS])
     if status == driver.STATUS_INTERRUPTED:
@@ -234,7 +237,10 @@ def make_orbit(problem: Problem, x, value, periods, run: Flow, iterations, resid
 
 def find_orbit(problem: Problem, start=None, value: float | None = None, periods: int = 1, tolerance: float = 1e-10,
                max_iterations: int = 30, transient: int = 50) -> Orbit:
-    """A period-``periods`` orbit by Newton's method on the shooting residual.
+    """A period-``periods`` orbit by Newton's method on the shooting residual (by the plain
+    model, :func:`shoot`), its Jacobian ``M - I`` from a variational run renewed only when
+    the residual stops shrinking fourfold per step (a chord method otherwise), and the
+    multipliers from a variational run at the converged state.
 
     Parameters
     ----------
@@ -271,13 +277,18 @@ def find_orbit(problem: Problem, start=None, value: float | None = None, periods
             raise ParameterError(f"start must be {problem.unknowns} finite numbers")
     eye = np.eye(problem.unknowns)
     residual = np.full(problem.unknowns, math.inf)
+    matrix, previous = None, math.inf
     for iteration in range(max_iterations + 1):
-        run = flow(problem, x, value, periods, SAMPLES_PER_PERIOD * periods)
-        residual = run.end - x
-        if np.linalg.norm(residual) <= tolerance * (1.0 + np.linalg.norm(x)):
-            return make_orbit(problem, x, value, periods, run, iteration, float(np.linalg.norm(residual)))
+        residual = shoot(problem, x, value, periods) - x
+        size = float(np.linalg.norm(residual))
+        if size <= tolerance * (1.0 + np.linalg.norm(x)):
+            run = flow(problem, x, value, periods, SAMPLES_PER_PERIOD * periods)
+            return make_orbit(problem, x, value, periods, run, iteration, size)
         if iteration < max_iterations:
-            x = x + np.linalg.lstsq(run.matrix - eye, -residual, rcond=None)[0]
+            if matrix is None or not size < 0.25 * previous:      # chord steps while they contract fast
+                matrix = flow(problem, x, value, periods).matrix
+            previous = size
+            x = x + np.linalg.lstsq(matrix - eye, -residual, rcond=None)[0]
     unit = f" {problem.unit}" if problem.unit else ""
     raise SimulationError(f"no period-{periods} orbit found at {problem.name} = {value:g}{unit}: Newton's "
                           f"method did not converge in {max_iterations} iterations (last residual "

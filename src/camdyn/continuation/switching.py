@@ -7,11 +7,9 @@ pitchfork: ``M^2 - I`` is singular along ``v`` and the period-``2k`` branch leav
 ``(x*, lambda*)`` with the tangent ``(v, 0)`` (Seydel 2010, *Practical Bifurcation and
 Stability Analysis*, doi:10.1007/978-1-4419-1740-9, sec. 7.4; Kuznetsov 2004, *Elements
 of Applied Bifurcation Theory*, doi:10.1007/978-1-4757-3978-7, sec. 4.5). The first orbit
-of the new branch is the solution ``u = (x, lambda)`` of
+of the new branch is the solution ``u = (x, lambda)`` of::
 
-```
-phi(t0 + 2kT; t0, x, lambda) - x = 0,      d . (u - u*) = epsilon,      d = (v, 0),
-```
+    phi(t0 + 2kT; t0, x, lambda) - x = 0,      d . (u - u*) = epsilon,      d = (v, 0),
 
 by Newton's method from ``u* + epsilon d`` (all in the scaled variables of the
 continuation). The period-``k`` branch crosses the same hyperplane too, but at a
@@ -94,10 +92,11 @@ def doubled_orbit(problem: Problem, orbit: Orbit, amplitude: float = 1e-3, toler
         x, value = z[:-1] * sx, float(z[-1] * scales[-1])
         run = flow(problem, x, value, 2 * k)
         h = 1e-6 * scales[-1]
-        slope = (shoot(problem, x, value + h, 2 * k) - shoot(problem, x, value - h, 2 * k)) / (2.0 * h)
+        plus, minus = shoot(problem, x, value + h, 2 * k), shoot(problem, x, value - h, 2 * k)
+        slope = (plus - minus) / (2.0 * h)                                 # central difference
         jacobian = np.vstack([np.c_[(run.matrix - np.eye(x.size)) * sx[None, :], slope * scales[-1]] / sx[:, None],
                               direction])
-        rhs = np.r_[(run.end - x) / sx, direction @ (z - anchor) - amplitude]
+        rhs = np.r_[(shoot(problem, x, value, 2 * k) - x) / sx, direction @ (z - anchor) - amplitude]
         step = np.linalg.solve(jacobian, -rhs)
         z = z + step
         if np.linalg.norm(step) < tolerance * (1.0 + np.linalg.norm(z)):
@@ -111,7 +110,7 @@ def doubled_orbit(problem: Problem, orbit: Orbit, amplitude: float = 1e-3, toler
         raise SimulationError(f"the search from the period doubling at {orbit.parameter:.9g} fell back onto the "
                               f"period-{k} orbit; try a larger amplitude")
     run = flow(problem, x, value, 2 * k, SAMPLES_PER_PERIOD * 2 * k)
-    return make_orbit(problem, x, value, 2 * k, run, 0, float(np.linalg.norm(run.end - x)))
+    return make_orbit(problem, x, value, 2 * k, run, 0, float(np.linalg.norm(shoot(problem, x, value, 2 * k) - x)))
 
 
 def switch_branch(problem: Problem, bifurcation: Bifurcation, stop: float, amplitude: float = 1e-3,
