@@ -43,7 +43,7 @@ from camdyn.errors import ParameterError, SimulationError
 #: Smallest arclength step by default (scaled units) [-].
 MIN_STEP = 1e-6
 
-__all__ = ["Bifurcation", "Branch", "continue_orbits", "KINDS"]
+__all__ = ["Bifurcation", "Branch", "continue_orbits", "continuation_scales", "KINDS"]
 
 #: The bifurcations detected, as named in results.
 KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing", "contact-loss", "sliding-reversal")
@@ -271,6 +271,17 @@ def _grazing_end(orbits: list[Orbit]) -> list[Bifurcation]:
     return [Bifurcation("grazing", b.parameter - b.guard_minimum / slope, b)]
 
 
+def continuation_scales(orbit: Orbit) -> np.ndarray:
+    """Scales of the unknowns ``(x, lambda)`` in the continuation: each state component by
+    its largest magnitude over the orbit (:attr:`Orbit.extent`; its magnitude at the
+    orbit's phase when not sampled), but by no less than a tenth of the largest, the
+    parameter by its magnitude. A component that passes near zero at the orbit's phase
+    (a follower at rest there) keeps the scale of its motion, not of the integration
+    noise."""
+    x0 = np.abs(orbit.state) if orbit.extent is None else np.maximum(np.abs(orbit.state), orbit.extent)
+    return np.r_[np.maximum(x0, max(0.1 * x0.max(), 1e-12)), max(abs(orbit.parameter), 1e-12)]
+
+
 def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0.01, min_step: float = MIN_STEP,
                     max_step: float = 0.1, max_points: int = 500, tolerance: float = 1e-10,
                     max_corrections: int = 15, progress: Callable[[Orbit], None] | None = None) -> Branch:
@@ -287,8 +298,9 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         the parameter leaves the interval between ``start.parameter`` and ``stop`` (the
         last point lands on it) or comes back past its start (after a fold).
     step, min_step, max_step : float
-        First, smallest and largest arclength step, in scaled units (the parameter scaled
-        by its starting magnitude, each state component by its own, but by no less than a
+        First, smallest and largest arclength step, in scaled units
+        (:func:`continuation_scales`: the parameter by its starting magnitude, each state
+        component by its largest magnitude over the starting orbit, but by no less than a
         tenth of the largest).
     max_points : int
         Most points on the branch.
@@ -310,8 +322,7 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
     if not hi > lo:
         raise ParameterError(f"stop must differ from the start {start.parameter}")
     direction = 1.0 if stop > start.parameter else -1.0
-    x0 = np.abs(start.state)
-    scales = np.r_[np.maximum(x0, max(0.1 * x0.max(), 1e-12)), max(abs(start.parameter), 1e-12)]
+    scales = continuation_scales(start)
     job = _Continuation(problem, start.periods, scales, tolerance, max_corrections)
     z0 = np.r_[start.state, start.parameter] / scales
     seed = np.zeros(z0.size)

@@ -106,6 +106,9 @@ class Orbit:
     sliding_minimum : float
         The cam-follower's smallest sliding velocity in contact, signed by the direction
         of sliding [m/s] (NaN for a test model).
+    extent : ndarray (u,) or None
+        The largest magnitude of each unknown over the orbit (its units), the scale of
+        that unknown in the continuation.
     """
 
     state: np.ndarray
@@ -122,6 +125,7 @@ class Orbit:
     monodromy: np.ndarray
     force_minimum: float = math.nan
     sliding_minimum: float = math.nan
+    extent: np.ndarray | None = None
 
 
 def _full(problem: Problem, x: np.ndarray) -> np.ndarray:
@@ -232,7 +236,8 @@ def make_orbit(problem: Problem, x, value, periods, run: Flow, iterations, resid
     force, sliding = contact_margins(problem.system_id, p, run.times, run.states, run.modes)
     return Orbit(np.asarray(x, float).copy(), _full(problem, x), float(value), float(periods * period), periods, values,
                  bool(np.all(np.abs(values) < 1.0 - STABILITY_MARGIN)), run.impacts, iterations, residual,
-                 run.guard_minimum, run.matrix, force, sliding)
+                 run.guard_minimum, run.matrix, force, sliding,
+                 np.max(np.abs(run.states[:, :problem.unknowns]), axis=0) if run.times.size > 2 else None)
 
 
 def find_orbit(problem: Problem, start=None, value: float | None = None, periods: int = 1, tolerance: float = 1e-10,

@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from camdyn.continuation.branches import Bifurcation, Branch, continue_orbits
+from camdyn.continuation.branches import Bifurcation, Branch, continuation_scales, continue_orbits
 from camdyn.continuation.orbits import SAMPLES_PER_PERIOD, Orbit, flow, make_orbit, shoot
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError, SimulationError
@@ -33,14 +33,6 @@ __all__ = ["doubled_orbit", "switch_branch"]
 
 #: A period-doubling point's multiplier must lie within this of -1 [-].
 MULTIPLIER_TOLERANCE = 0.05
-
-
-def _scales(orbit: Orbit) -> np.ndarray:
-    """Scales of ``(x, lambda)``, as :func:`~camdyn.continuation.branches.continue_orbits`
-    takes them: each state component by its magnitude but no less than a tenth of the
-    largest, the parameter by its value."""
-    x0 = np.abs(orbit.state)
-    return np.r_[np.maximum(x0, max(0.1 * x0.max(), 1e-12)), max(abs(orbit.parameter), 1e-12)]
 
 
 def _critical_vector(orbit: Orbit) -> np.ndarray:
@@ -82,7 +74,7 @@ def doubled_orbit(problem: Problem, orbit: Orbit, amplitude: float = 1e-3, toler
         raise ParameterError(f"amplitude must lie in (0, 0.5), tolerance be positive and max_iterations at least "
                              f"1; got {amplitude}, {tolerance}, {max_iterations}")
     k = orbit.periods
-    scales = _scales(orbit)
+    scales = continuation_scales(orbit)
     sx = scales[:-1]
     vector = _critical_vector(orbit) / sx
     direction = np.r_[vector / np.linalg.norm(vector), 0.0]
