@@ -79,3 +79,21 @@ def test_period_doubling_lies_where_the_diagram_doubles_and_the_unstable_orbit_i
         orbit = _orbit_at(problem, branch, SPEEDS[i])
         assert not orbit.stable and orbit.periods == 1
         assert np.min(np.abs(diagram["poincare_alpha"].values[i, -2:] - orbit.state[0])) > 1e-3
+
+
+def test_continue_cli_switches_at_the_doubling(capsys):
+    import json
+
+    from camdyn.cli.app import main
+    assert main(["continue", "sundar2014-impact", "--from", "15.8Hz", "--to", "16.3Hz", "--transient", "100",
+                 "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["summary"]["branch_count"] == 2
+    assert [(b["kind"], b["branch"]) for b in doc["bifurcations"]] == [("period-doubling", 0)]
+    assert abs(doc["bifurcations"][0]["parameter"] - 16.0161) < 1e-3          # as the brute-force test finds it
+    single, double = doc["branches"]
+    assert all(p["periods"] == 1 and len(p["poincare"]) == 1 for p in single)
+    assert all(p["periods"] == 2 and len(p["poincare"]) == 2 for p in double)
+    assert double[-1]["parameter"] == pytest.approx(16.3, abs=1e-9) and double[-1]["stable"]
+    # the two Poincare points of the period-2 orbit split apart past the doubling
+    assert abs(double[-1]["poincare"][0] - double[-1]["poincare"][1]) > 1e-3
