@@ -316,11 +316,12 @@ def test_branch_figure_draws_unstable_dashed_and_is_readable(tmp_path, monkeypat
         styles = {(line.get_linestyle(), round(float(np.mean(line.get_xdata())), 3))
                   for line in fig.axes[0].get_lines()}
         dots = [line for line in fig.axes[0].get_lines() if line.get_marker() == "."]
-        seen.append((layout_problems(fig), styles, fig.axes[-1].get_xlabel(), dots))
+        forces = np.concatenate([line.get_ydata() for line in fig.axes[1].get_lines() if len(line.get_ydata()) > 2])
+        seen.append((layout_problems(fig), styles, fig.axes[-1].get_xlabel(), dots, forces, fig.axes[1].get_ylabel()))
     monkeypatch.setattr(style, "SAVE_HOOKS", [hook])
     speeds = np.linspace(10.0, 20.0, 11)
     records = [[{"parameter": s, "stable": s < 15.0, "multipliers": [[-0.1 * s / 1.5, 0.0], [0.01, 0.0]],
-                 "period": 1 / s, "impacts_per_period": 1, "max_normal_force": 5.0 + s,
+                 "period": 1 / s, "impacts_per_period": 1, "max_normal_force": 1e3 * (5.0 + s),
                  "max_penetration": 1e-6, "state": [0.07, 0.1]} for s in speeds]]
     problem = model_problem(systems.RIGID_IMPACT, [1.0, 0.05, 1.0, 2.0, 0.0, 0.8], [-1.0, 0.0, 0.0])
     problem = dataclasses.replace(problem, name="motion.speed", unit="Hz")
@@ -328,17 +329,19 @@ def test_branch_figure_draws_unstable_dashed_and_is_readable(tmp_path, monkeypat
     assert ds["max_normal_force"].attrs["units"] == "N"
     assert ds["bifurcation_kind"].values.tolist() == ["period-doubling"]
     plot_branches(ds, tmp_path / "branch.png")
-    problems, styles, xlabel, dots = seen[0]
+    problems, styles, xlabel, dots, forces, force_label = seen[0]
     assert problems == [], problems
     # stable 10-14 Hz solid (mean 12); unstable 15-20 Hz dashed, joined to the last stable point (mean 17)
     assert ("-", 12.0) in styles and ("--", 17.0) in styles, styles
     assert "Hz" in xlabel and dots == []
+    # the forces, 15 to 25 kN, drawn in kN
+    assert "kN" in force_label and forces.min() == pytest.approx(15.0) and forces.max() == pytest.approx(25.0)
     # over a brute-force diagram: its Poincare points drawn as dots, in degrees like the branches
     diagram = xr.Dataset({"poincare_alpha": (("motion.speed", "revolution"), np.full((6, 3), 0.07),
                                              {"units": "rad"})},
                          coords={"motion.speed": ("motion.speed", np.linspace(10.0, 20.0, 6), {"units": "Hz"})})
     plot_branches(ds, tmp_path / "overlay.png", diagram)
-    problems, styles, _, dots = seen[1]
+    problems, styles, _, dots, _, _ = seen[1]
     assert problems == [] and ("-", 12.0) in styles and len(dots) == 1, (problems, styles)
     np.testing.assert_allclose(dots[0].get_ydata(), math.degrees(0.07))
     np.testing.assert_allclose(dots[0].get_xdata(), np.repeat(np.linspace(10.0, 20.0, 6), 3))

@@ -27,10 +27,12 @@ def _runs(stable: np.ndarray) -> list[slice]:
 
 
 def _diagram(ax, diagram: xr.Dataset, scale: float, angle: float) -> None:
-    """The brute-force diagram's Poincare points, small grey dots, under the branches."""
+    """The brute-force diagram's Poincare points, small grey dots, under the branches
+    (``scale`` and ``angle``: the display factors of the parameter and of the angle,
+    :func:`~camdyn.plotting.style.display_scale`)."""
     values = diagram["poincare_alpha"]
     x = np.asarray(values[values.dims[0]].values, dtype=float)
-    ax.plot(np.repeat(x, values.shape[1]) / scale, values.values.ravel() * angle, ".", color="0.55", ms=1.5,
+    ax.plot(np.repeat(x, values.shape[1]) * scale, values.values.ravel() * angle, ".", color="0.55", ms=1.5,
             label="brute force", zorder=1)
 
 
@@ -38,7 +40,7 @@ def _draw(axes, ds, index, scale, rows) -> None:
     """Branch ``index`` on every panel: ``rows`` (one array over points per curve and
     panel), stable runs solid and unstable runs dashed."""
     on = ds["branch"].values == index
-    x = ds["parameter"].values[on] / scale
+    x = ds["parameter"].values[on] * scale
     stable = ds["stable"].values[on].astype(bool)
     for part in _runs(stable):
         style = "-" if stable[part.stop - 1] else "--"
@@ -78,7 +80,7 @@ def plot_branches(ds: xr.Dataset, path: str | Path, diagram: xr.Dataset | None =
     rows = [[section.values[:, j] * angle for j in range(section.shape[1])]]
     if panels == 3:
         force_scale, force_unit = display_scale(force)
-        rows.append([force.values / force_scale])
+        rows.append([force.values * force_scale])
     rows.append([np.nanmax(modulus, axis=1)])
     if diagram is not None:
         _diagram(axes[0], diagram, scale, angle)
@@ -88,8 +90,8 @@ def plot_branches(ds: xr.Dataset, path: str | Path, diagram: xr.Dataset | None =
     axes[-1].axhline(1.0, color="k", lw=0.6, ls=":")
     for kind, value in zip(ds["bifurcation_kind"].values, ds["bifurcation_parameter"].values):
         for ax in axes:
-            ax.axvline(value / scale, color="0.4", lw=0.6)
-        axes[-1].plot([value / scale], [1.0], _MARKERS.get(str(kind), "x"), color="k", label=str(kind))
+            ax.axvline(value * scale, color="0.4", lw=0.6)
+        axes[-1].plot([value * scale], [1.0], _MARKERS.get(str(kind), "x"), color="k", label=str(kind))
     axes[0].set_ylabel(axis_label(r"$\alpha_P$", angle_unit))
     if panels == 3:
         axes[1].set_ylabel(axis_label("max $F_n$", force_unit))
