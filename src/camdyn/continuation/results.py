@@ -90,7 +90,8 @@ def orbit_record(problem: Problem, orbit: Orbit) -> dict:
     """One orbit as a record: ``parameter`` [SI], ``stable``, ``multipliers`` ([re, im]
     pairs), ``period`` [s], ``periods`` (forcing periods per orbit period),
     ``impacts_per_period``, ``max_normal_force`` [N] and ``max_penetration`` [m] over the
-    orbit (from a simulation of one orbit period from its state; NaN for a test model),
+    orbit (from a simulation of one orbit period from its state, its samples and its
+    impacts' peaks; NaN for a test model),
     ``min_normal_force`` [N] and ``min_sliding_velocity`` [m/s] (the contact-loss and
     sliding-reversal test functions; NaN for a test model), ``state`` (the unknowns at
     the phase ``t_start``) and ``poincare`` (the first unknown at each of the orbit's
@@ -101,8 +102,10 @@ def orbit_record(problem: Problem, orbit: Orbit) -> dict:
         system = problem.system.with_values(**{problem.key: orbit.parameter})
         ds = simulate(system, revolutions=orbit.periods, initial_state=orbit.state, rtol=problem.rtol,
                       atol=problem.atol, sample_rate=512.0 / orbit.period * orbit.periods,
-                      variables=["Fn", "penetration"])
-        force, penetration = float(ds["Fn"].max()), float(ds["penetration"].max())
+                      variables=["Fn", "penetration", "impact"])
+        # an impact's peak (tracked by the event log) falls between samples
+        force = float(np.nanmax(np.r_[ds["Fn"].values, ds["impact_peak_force"].values]))
+        penetration = float(np.nanmax(np.r_[ds["penetration"].values, ds["impact_peak_penetration"].values]))
     return {"parameter": orbit.parameter, "stable": orbit.stable,
             "multipliers": [[float(m.real), float(m.imag)] for m in orbit.multipliers], "period": orbit.period,
             "periods": orbit.periods, "impacts_per_period": orbit.impacts_per_period, "max_normal_force": force,
