@@ -97,3 +97,27 @@ def test_continue_cli_switches_at_the_doubling(capsys):
     assert double[-1]["parameter"] == pytest.approx(16.3, abs=1e-9) and double[-1]["stable"]
     # the two Poincare points of the period-2 orbit split apart past the doubling
     assert abs(double[-1]["poincare"][0] - double[-1]["poincare"][1]) > 1e-3
+
+
+def test_contact_loss_lies_where_the_diagram_starts_to_impact(tmp_path):
+    import camdyn
+    from camdyn.continuation.results import trace_branch
+    from camdyn.sweeps import run_sweep, spec_from_dict
+    speeds = [6.8, 6.85, 6.95, 7.0]
+    table = {"system": {"source": "sundar2014-impact", "set": {}},
+             "vary": [{"key": "motion.speed", "values": speeds}],
+             "run": {"revolutions": 60, "discard": 40}, "metrics": {"names": ["regime", "impacts"]},
+             "output": {"path": str(tmp_path / "diagram.nc")}}
+    diagram = run_sweep(spec_from_dict(table, name="diagram"), workers=0, progress=False).load()
+    kept = diagram["regime"].values == 0                          # contact kept, no impacts
+    assert kept.tolist() == [True, True, False, False], diagram["regime"].values
+    assert np.all(diagram["impacts_per_revolution"].values[~kept] > 1)
+    # a short first step: with 0.02 the corrector can jump across the opening contact onto an
+    # unstable impacting orbit (docs/continuation.md, limits)
+    _, branch = trace_branch(camdyn.load_system("sundar2014-impact"), "motion.speed", 6.8, 7.0, transient=100,
+                             step=0.005)
+    assert branch.orbits[0].impacts_per_period == 0 and branch.orbits[0].stable
+    loss = [b.parameter for b in branch.bifurcations if b.kind == "contact-loss"]
+    # the contact branch's smallest force reaches zero (6.9071 Hz) between the diagram's last
+    # speed in contact and its first with impacts
+    assert len(loss) == 1 and 6.85 < loss[0] < 6.95, (loss, branch.stopped)

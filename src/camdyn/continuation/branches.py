@@ -271,6 +271,23 @@ def _grazing_end(orbits: list[Orbit]) -> list[Bifurcation]:
     return [Bifurcation("grazing", b.parameter - b.guard_minimum / slope, b)]
 
 
+def _contact_loss_end(orbits: list[Orbit]) -> list[Bifurcation]:
+    """A cam-follower branch that ends (the corrector fails) just before its smallest
+    normal force reaches zero: a contact loss at the zero of the secant through the last
+    two points' ``min Fn``, if it lies within the last step beyond the end. (Where the
+    orbit must jump to an impacting motion as the contact opens, as on the chapter 3 rig,
+    no corrected point exists past it.)"""
+    if len(orbits) < 2:
+        return []
+    a, b = orbits[-2], orbits[-1]
+    if not (math.isfinite(a.force_minimum) and a.force_minimum > b.force_minimum > 0):
+        return []
+    zero = b.parameter - b.force_minimum * (b.parameter - a.parameter) / (b.force_minimum - a.force_minimum)
+    if abs(zero - b.parameter) > abs(b.parameter - a.parameter):
+        return []
+    return [Bifurcation("contact-loss", zero, b)]
+
+
 def continuation_scales(orbit: Orbit) -> np.ndarray:
     """Scales of the unknowns ``(x, lambda)`` in the continuation: each state component by
     its largest magnitude over the orbit (:attr:`Orbit.extent`; its magnitude at the
@@ -352,7 +369,7 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         except (SimulationError, ParameterError):
             ds *= 0.5
             if ds < min_step:
-                branch.bifurcations.extend(_grazing_end(branch.orbits))
+                branch.bifurcations.extend(_contact_loss_end(branch.orbits) + _grazing_end(branch.orbits))
                 return Branch(branch.orbits, branch.bifurcations,
                               f"the step fell below {min_step:g} at {problem.name} = {point.orbit.parameter:.9g}")
             continue
