@@ -233,7 +233,7 @@ def test_continue_cli_json_netcdf_and_figure(tmp_path, capsys):
     from camdyn.cli.app import main
     out, plot = tmp_path / "branch.nc", tmp_path / "branch.png"
     args = ["continue", "sundar2014-friction", "--set", "cam.runout=0.875mm", "--from", "11Hz", "--to", "11.6Hz",
-            "--transient", "5", "--out", str(out), "--plot", str(plot), "--json"]
+            "--transient", "5", "--out", str(out), "--plot", str(plot), "--json", "--brute-force", "3"]
     assert main(args) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["schema"] == "camdyn.continue/1"
@@ -259,6 +259,8 @@ def test_continue_cli_json_netcdf_and_figure(tmp_path, capsys):
     (["--from", "11Hz", "--to", "12Hz", "--out", "branch.txt"], ".nc"),
     (["--parameter", "cam.runout", "--from", "1.2", "--to", "1.4mm"], "has no unit"),
     (["--from", "11Hz", "--to", "12Hz", "--step", "1e-9"], "step at least"),
+    (["--from", "11Hz", "--to", "12Hz", "--brute-force", "20"], "give --plot"),
+    (["--from", "11Hz", "--to", "12Hz", "--doublings", "-1"], "--doublings"),
     (["--from", "11Hz", "--to", "12Hz", "--set", "motion.kind=ramp", "--set", "motion.ramp_time=1s"], "ramp"),
     (["--from", "11Hz", "--to", "12Hz", "--set", "motion.kind=oscillating", "--set", "motion.frequency=5Hz",
       "--set", "motion.amplitude=0.1"], "motion.frequency"),
@@ -272,7 +274,7 @@ def test_continue_cli_refuses_bad_input_in_one_line(args, words, capsys):
 
 def test_cam_follower_branch_loses_contact_at_the_inverse_kinematics_speed():
     import camdyn
-    from camdyn.analysis.kinematics import loss_of_contact_speed
+    from camdyn.analysis.kinematics import inverse_kinematics, loss_of_contact_speed
     from camdyn.continuation.results import trace_branch
     system = camdyn.load_system("sundar2014-friction")                  # e/a = 0.1
     # rigid contact: the lowest speed at which the cam's motion needs a pulling force
@@ -284,9 +286,27 @@ def test_cam_follower_branch_loses_contact_at_the_inverse_kinematics_speed():
     # the rigid-contact kinematics leave out the Hertz contact's compliance and the follower's
     # dynamic response, of relative order (f / f_n)^2 = (18 Hz / 961 Hz)^2 = 4e-4
     assert abs(grazing[0].parameter - expected) < 2e-3 * expected, (grazing[0].parameter, expected)
+    # min Fn = 0 is located too (measured 7.8e-4 below the kinematics), before the gap opens
+    loss = [b for b in branch.bifurcations if b.kind == "contact-loss"]
+    assert len(loss) == 1 and abs(loss[0].parameter - expected) < 2e-3 * expected, (loss, expected)
+    assert loss[0].parameter <= grazing[0].parameter and abs(loss[0].orbit.force_minimum) < 1e-6
+    # the test functions are the orbit's smallest Fn and vr: a simulation of the first orbit
+    # (dense samples, its own output code) gives the same; the rigid kinematics' vr is
+    # Omega (w - alpha_k' h) > 0 at every speed, so sliding never reverses on this branch
+    orbit = branch.orbits[0]
+    one = camdyn.simulate(system.with_values(**{"motion.speed": orbit.parameter}), revolutions=1,
+                          initial_state=orbit.state, rtol=1e-10, atol=1e-12, sample_rate=4096 * orbit.parameter,
+                          variables=["Fn", "sliding_velocity"])
+    assert orbit.force_minimum == pytest.approx(float(one["Fn"].min()), rel=1e-5)
+    assert orbit.sliding_minimum == pytest.approx(float(one["sliding_velocity"].min()), rel=1e-6)
+    kinematic = inverse_kinematics(system, speed=orbit.parameter)["sliding_velocity"]
+    assert orbit.sliding_minimum == pytest.approx(float(kinematic.min()), rel=1e-5)      # measured 1e-7
+    assert "sliding-reversal" not in [b.kind for b in branch.bifurcations]
 
 
 def test_branch_figure_draws_unstable_dashed_and_is_readable(tmp_path, monkeypatch):
+    import xarray as xr
+
     from camdyn.continuation.results import branches_dataset
     from camdyn.plotting import layout_problems, style
     from camdyn.plotting.branches import plot_branches
@@ -295,11 +315,13 @@ def test_branch_figure_draws_unstable_dashed_and_is_readable(tmp_path, monkeypat
     def hook(fig):
         styles = {(line.get_linestyle(), round(float(np.mean(line.get_xdata())), 3))
                   for line in fig.axes[0].get_lines()}
-        seen.append((layout_problems(fig), styles, fig.axes[1].get_xlabel()))
+        dots = [line for line in fig.axes[0].get_lines() if line.get_marker() == "."]
+        forces = np.concatenate([line.get_ydata() for line in fig.axes[1].get_lines() if len(line.get_ydata()) > 2])
+        seen.append((layout_problems(fig), styles, fig.axes[-1].get_xlabel(), dots, forces, fig.axes[1].get_ylabel()))
     monkeypatch.setattr(style, "SAVE_HOOKS", [hook])
     speeds = np.linspace(10.0, 20.0, 11)
     records = [[{"parameter": s, "stable": s < 15.0, "multipliers": [[-0.1 * s / 1.5, 0.0], [0.01, 0.0]],
-                 "period": 1 / s, "impacts_per_period": 1, "max_normal_force": 5.0 + s,
+                 "period": 1 / s, "impacts_per_period": 1, "max_normal_force": 1e3 * (5.0 + s),
                  "max_penetration": 1e-6, "state": [0.07, 0.1]} for s in speeds]]
     problem = model_problem(systems.RIGID_IMPACT, [1.0, 0.05, 1.0, 2.0, 0.0, 0.8], [-1.0, 0.0, 0.0])
     problem = dataclasses.replace(problem, name="motion.speed", unit="Hz")
@@ -307,8 +329,19 @@ def test_branch_figure_draws_unstable_dashed_and_is_readable(tmp_path, monkeypat
     assert ds["max_normal_force"].attrs["units"] == "N"
     assert ds["bifurcation_kind"].values.tolist() == ["period-doubling"]
     plot_branches(ds, tmp_path / "branch.png")
-    problems, styles, xlabel = seen[0]
+    problems, styles, xlabel, dots, forces, force_label = seen[0]
     assert problems == [], problems
     # stable 10-14 Hz solid (mean 12); unstable 15-20 Hz dashed, joined to the last stable point (mean 17)
     assert ("-", 12.0) in styles and ("--", 17.0) in styles, styles
-    assert "Hz" in xlabel
+    assert "Hz" in xlabel and dots == []
+    # the forces, 15 to 25 kN, drawn in kN
+    assert "kN" in force_label and forces.min() == pytest.approx(15.0) and forces.max() == pytest.approx(25.0)
+    # over a brute-force diagram: its Poincare points drawn as dots, in degrees like the branches
+    diagram = xr.Dataset({"poincare_alpha": (("motion.speed", "revolution"), np.full((6, 3), 0.07),
+                                             {"units": "rad"})},
+                         coords={"motion.speed": ("motion.speed", np.linspace(10.0, 20.0, 6), {"units": "Hz"})})
+    plot_branches(ds, tmp_path / "overlay.png", diagram)
+    problems, styles, _, dots, _, _ = seen[1]
+    assert problems == [] and ("-", 12.0) in styles and len(dots) == 1, (problems, styles)
+    np.testing.assert_allclose(dots[0].get_ydata(), math.degrees(0.07))
+    np.testing.assert_allclose(dots[0].get_xdata(), np.repeat(np.linspace(10.0, 20.0, 6), 3))

@@ -35,16 +35,25 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                     max_points: int = typer.Option(200, help="Most orbits on the branch."),
                     transient: int = typer.Option(50, help="Cam periods simulated before the first orbit is "
                                                            "sought."),
+                    doublings: int = typer.Option(1, help="Period doublings followed: at each one located, "
+                                                          "switch onto the period-2k branch and continue it "
+                                                          "(0: none, 2: their doublings too)."),
+                    brute_force: int = typer.Option(0, "--brute-force",
+                                                    help="Draw the brute-force bifurcation diagram under the "
+                                                         "branches in --plot: a sweep of this many values over "
+                                                         "the range, 300 cam periods each, 200 discarded "
+                                                         "(0: none)."),
                     plot: Optional[Path] = typer.Option(None, help="Figure of the branch (.png, .pdf, ...)."),
                     out: Optional[Path] = typer.Option(None, help="Result file (.nc)."),
                     force: bool = ForceOption,
                     quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
                     json_: bool = JsonOption):
     """Continue periodic orbits over a parameter range: stability from the Floquet
-    multipliers, and folds, period doublings, Neimark-Sacker bifurcations and grazing
-    located on the way (docs/continuation.md)."""
+    multipliers; folds, period doublings, Neimark-Sacker bifurcations, grazing, loss of
+    contact and sliding reversal located on the way; the period-doubled branches
+    followed (docs/continuation.md)."""
     from camdyn.continuation.problem import parameter_unit
-    from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset
+    from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset, switch_doublings
 
     check_outputs(netcdf=out, figure=plot, force=force)
     system = load_source(source, set_)
@@ -57,29 +66,62 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     if period < 1 or max_points < 2 or transient < 1 or not step >= MIN_STEP:
         raise ParameterError(f"--period and --transient must be at least 1, --max-points at least 2, --step at "
                              f"least {MIN_STEP:g}")
+    if doublings < 0 or brute_force < 0 or brute_force == 1:
+        raise ParameterError("--doublings must be at least 0, --brute-force 0 or at least 2")
+    if brute_force and plot is None:
+        raise ParameterError("--brute-force draws the diagram under the branches of --plot: give --plot")
     problem, branch = _trace(system, parameter, first, last, period, step, max_points, transient, quiet or json_)
-    records = [branch_records(problem, branch)]
-    bifurcations = bifurcation_records([branch])
+    branches = [branch, *switch_doublings(problem, branch, last, doublings, step, max_points)]
+    records = [branch_records(problem, b) for b in branches]
+    bifurcations = bifurcation_records(branches)
     files = []
     if out is not None:
         from camdyn.io.netcdf import save_netcdf
         files.append(announce(save_netcdf(branches_dataset(problem, records, bifurcations), out), json_))
     if plot is not None:
         from camdyn.plotting.branches import plot_branches
-        files.append(announce(plot_branches(branches_dataset(problem, records, bifurcations), plot), json_))
+        diagram = _brute_force(source, set_, parameter, first, last, brute_force, quiet or json_)
+        files.append(announce(plot_branches(branches_dataset(problem, records, bifurcations), plot, diagram),
+                              json_))
     if json_:
         summary = {"parameter": parameter, "units": unit, "points": len(branch.orbits),
                    "stable_points": sum(o.stable for o in branch.orbits), "bifurcation_count": len(bifurcations),
-                   "stopped": branch.stopped}
+                   "stopped": branch.stopped, "branch_count": len(branches)}
         emit_json("continue", summary, branches=records, bifurcations=bifurcations, files=files)
         return
     stable = sum(o.stable for o in branch.orbits)
     console.print(f"{len(branch.orbits)} orbits of period {period} over {parameter} = {branch.orbits[0].parameter:.6g}"
                   f" to {branch.orbits[-1].parameter:.6g} {unit}, {stable} stable; {branch.stopped}",
                   highlight=False, soft_wrap=True)
+    for extra in branches[1:]:
+        console.print(f"{len(extra.orbits)} orbits of period {extra.orbits[0].periods} from {parameter} = "
+                      f"{extra.orbits[0].parameter:.9g} {unit}; {extra.stopped}", highlight=False, soft_wrap=True)
     for item in bifurcations:
-        console.print(f"  {item['kind']} at {parameter} = {item['parameter']:.9g} {unit}", highlight=False,
-                      soft_wrap=True)
+        console.print(f"  {item['kind']} at {parameter} = {item['parameter']:.9g} {unit} (branch {item['branch']})",
+                      highlight=False, soft_wrap=True)
+
+
+def _brute_force(source, set_, parameter, first, last, count, quiet):
+    """The brute-force bifurcation diagram over ``count`` values of the parameter (a
+    sweep with the Poincare metric, as ``camdyn bifurcation``), or None if ``count`` is 0."""
+    if not count:
+        return None
+    import tempfile
+
+    import numpy as np
+
+    from camdyn.params.config import parse_assignments
+    from camdyn.sweeps import run_sweep, spec_from_dict
+
+    with tempfile.TemporaryDirectory() as folder:
+        table = {"system": {"source": source, "set": parse_assignments(set_)},
+                 "vary": [{"key": parameter, "values": [float(v) for v in np.linspace(first, last, count)]}],
+                 "run": {"revolutions": 300, "discard": 200}, "metrics": {"names": ["poincare"]},
+                 "output": {"path": str(Path(folder) / "diagram.nc")}}
+        result = run_sweep(spec_from_dict(table, name="diagram"), progress=not quiet)
+        diagram = result.load()
+        result.close()
+    return diagram
 
 
 def _trace(system, parameter, first, last, period, step, max_points, transient, quiet):

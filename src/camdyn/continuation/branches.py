@@ -21,7 +21,11 @@ by the secant method (Illinois variant) along the arclength (Seydel 2010, sec. 5
   circle; a real pair with product 1, a neutral saddle, is discarded after location);
 * grazing: the number of impacts per period changes (located by bisection, as the
   orbit's topology changes there: Di Bernardo et al. 2008, *Piecewise-smooth Dynamical
-  Systems*, ch. 8).
+  Systems*, ch. 8);
+* contact loss (the cam-follower): the smallest normal force over the orbit, unclipped
+  (``min Fn = 0``; :mod:`.margins`);
+* sliding reversal (the cam-follower): the smallest sliding velocity in contact, signed
+  by the direction of sliding (``min s vr = 0``; :mod:`.margins`).
 """
 
 from __future__ import annotations
@@ -39,10 +43,12 @@ from camdyn.errors import ParameterError, SimulationError
 #: Smallest arclength step by default (scaled units) [-].
 MIN_STEP = 1e-6
 
-__all__ = ["Bifurcation", "Branch", "continue_orbits", "KINDS"]
+__all__ = ["Bifurcation", "Branch", "continue_orbits", "continuation_scales", "KINDS"]
 
 #: The bifurcations detected, as named in results.
-KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing")
+KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing", "contact-loss", "sliding-reversal")
+#: The kinds located by the sign change of a smooth test function.
+_SMOOTH = ("fold", "period-doubling", "neimark-sacker", "contact-loss", "sliding-reversal")
 
 
 @dataclass(frozen=True)
@@ -112,9 +118,11 @@ class _Continuation:
         x, value = self.unscale(z)
         return (shoot(self.problem, x, value, self.periods) - x) / self.scales[:-1]
 
-    def linearization(self, z: np.ndarray) -> tuple[Flow, np.ndarray]:
-        """The variational run at scaled ``z`` (sampled) and the scaled Jacobian
-        ``[M - I, G_lambda]`` there (``G_lambda`` by central differences)."""
+    def linearization(self, z: np.ndarray) -> tuple[Flow, np.ndarray, np.ndarray]:
+        """The variational run at scaled ``z`` (sampled), the scaled Jacobian
+        ``[M - I, G_lambda]`` there (``G_lambda`` by central differences) and an
+        estimate of the scaled residual (the mean of the two differenced runs, exact to
+        ``O(h^2)``: what the orbit reports, never what Newton's method solves)."""
         x, value = self.unscale(z)
         run = flow(self.problem, x, value, self.periods, SAMPLES_PER_PERIOD * self.periods)
         h = 1e-6 * self.scales[-1]
@@ -124,14 +132,15 @@ class _Continuation:
         jac[:, :-1] = run.matrix - np.eye(self.u)
         jac[:, -1] = (plus - minus) / (2.0 * h)                        # central difference
         sx = self.scales[:-1]
-        return run, jac * self.scales[None, :] / sx[:, None]
+        return run, jac * self.scales[None, :] / sx[:, None], (0.5 * (plus + minus) - x) / sx
 
     def point(self, z: np.ndarray, previous: np.ndarray, iterations: int) -> _Point:
         """The converged point at ``z``: its orbit (monodromy and multipliers from the
         variational run), its Jacobian and the tangent oriented along ``previous``."""
-        run, jac = self.linearization(z)
+        run, jac, residual = self.linearization(z)
         x, value = self.unscale(z)
-        orbit = make_orbit(self.problem, x, value, self.periods, run, iterations, float(np.linalg.norm(run.end - x)))
+        orbit = make_orbit(self.problem, x, value, self.periods, run, iterations,
+                           float(np.linalg.norm(residual * self.scales[:-1])))
         vector = np.linalg.svd(jac)[2][-1]                               # the null vector
         return _Point(z, vector if vector @ previous >= 0 else -vector, orbit, iterations, jac)
 
@@ -153,9 +162,8 @@ class _Continuation:
         last = math.inf
         for iteration in range(1, self.max_corrections + 1):
             if jac is None:
-                run, fresh = self.linearization(z)
-                x, _ = self.unscale(z)
-                residual = (run.end - x) / self.scales[:-1]
+                _, fresh, _ = self.linearization(z)
+                residual = self.residual(z)
                 full = np.vstack([fresh, direction])
             else:
                 residual = self.residual(z)
@@ -178,7 +186,9 @@ def _tests(point: _Point) -> dict:
     pairs = [mu[i] * mu[j] - 1.0 for i in range(mu.size) for j in range(i + 1, mu.size)]
     return {"fold": float(point.tangent[-1]),
             "period-doubling": float(np.real(np.prod(mu + 1.0))),
-            "neimark-sacker": float(np.real(np.prod(pairs))) if pairs else 1.0}
+            "neimark-sacker": float(np.real(np.prod(pairs))) if pairs else 1.0,
+            "contact-loss": point.orbit.force_minimum,
+            "sliding-reversal": point.orbit.sliding_minimum}
 
 
 def _locate(job: _Continuation, a: _Point, b: _Point, kind: str, max_iterations: int = 60) -> _Point | None:
@@ -232,8 +242,8 @@ def _locate(job: _Continuation, a: _Point, b: _Point, kind: str, max_iterations:
 def _detect(job: _Continuation, a: _Point, b: _Point) -> list[Bifurcation]:
     found = []
     before, after = _tests(a), _tests(b)
-    for kind in ("fold", "period-doubling", "neimark-sacker"):
-        if before[kind] * after[kind] < 0:
+    for kind in _SMOOTH:
+        if before[kind] * after[kind] < 0:                       # False for NaN (a test model)
             point = _locate(job, a, b, kind)
             if point is not None:
                 found.append(Bifurcation(kind, point.orbit.parameter, point.orbit))
@@ -261,6 +271,34 @@ def _grazing_end(orbits: list[Orbit]) -> list[Bifurcation]:
     return [Bifurcation("grazing", b.parameter - b.guard_minimum / slope, b)]
 
 
+def _contact_loss_end(orbits: list[Orbit]) -> list[Bifurcation]:
+    """A cam-follower branch that ends (the corrector fails) just before its smallest
+    normal force reaches zero: a contact loss at the zero of the secant through the last
+    two points' ``min Fn``, if it lies within the last step beyond the end. (Where the
+    orbit must jump to an impacting motion as the contact opens, as on the chapter 3 rig,
+    no corrected point exists past it.)"""
+    if len(orbits) < 2:
+        return []
+    a, b = orbits[-2], orbits[-1]
+    if not (math.isfinite(a.force_minimum) and a.force_minimum > b.force_minimum > 0):
+        return []
+    zero = b.parameter - b.force_minimum * (b.parameter - a.parameter) / (b.force_minimum - a.force_minimum)
+    if abs(zero - b.parameter) > abs(b.parameter - a.parameter):
+        return []
+    return [Bifurcation("contact-loss", zero, b)]
+
+
+def continuation_scales(orbit: Orbit) -> np.ndarray:
+    """Scales of the unknowns ``(x, lambda)`` in the continuation: each state component by
+    its largest magnitude over the orbit (:attr:`Orbit.extent`; its magnitude at the
+    orbit's phase when not sampled), but by no less than a tenth of the largest, the
+    parameter by its magnitude. A component that passes near zero at the orbit's phase
+    (a follower at rest there) keeps the scale of its motion, not of the integration
+    noise."""
+    x0 = np.abs(orbit.state) if orbit.extent is None else np.maximum(np.abs(orbit.state), orbit.extent)
+    return np.r_[np.maximum(x0, max(0.1 * x0.max(), 1e-12)), max(abs(orbit.parameter), 1e-12)]
+
+
 def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0.01, min_step: float = MIN_STEP,
                     max_step: float = 0.1, max_points: int = 500, tolerance: float = 1e-10,
                     max_corrections: int = 15, progress: Callable[[Orbit], None] | None = None) -> Branch:
@@ -277,8 +315,9 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         the parameter leaves the interval between ``start.parameter`` and ``stop`` (the
         last point lands on it) or comes back past its start (after a fold).
     step, min_step, max_step : float
-        First, smallest and largest arclength step, in scaled units (the parameter scaled
-        by its starting magnitude, each state component by its own, but by no less than a
+        First, smallest and largest arclength step, in scaled units
+        (:func:`continuation_scales`: the parameter by its starting magnitude, each state
+        component by its largest magnitude over the starting orbit, but by no less than a
         tenth of the largest).
     max_points : int
         Most points on the branch.
@@ -300,8 +339,7 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
     if not hi > lo:
         raise ParameterError(f"stop must differ from the start {start.parameter}")
     direction = 1.0 if stop > start.parameter else -1.0
-    x0 = np.abs(start.state)
-    scales = np.r_[np.maximum(x0, max(0.1 * x0.max(), 1e-12)), max(abs(start.parameter), 1e-12)]
+    scales = continuation_scales(start)
     job = _Continuation(problem, start.periods, scales, tolerance, max_corrections)
     z0 = np.r_[start.state, start.parameter] / scales
     seed = np.zeros(z0.size)
@@ -331,7 +369,7 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         except (SimulationError, ParameterError):
             ds *= 0.5
             if ds < min_step:
-                branch.bifurcations.extend(_grazing_end(branch.orbits))
+                branch.bifurcations.extend(_contact_loss_end(branch.orbits) + _grazing_end(branch.orbits))
                 return Branch(branch.orbits, branch.bifurcations,
                               f"the step fell below {min_step:g} at {problem.name} = {point.orbit.parameter:.9g}")
             continue

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from camdyn.continuation.margins import contact_margins
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.integrator import driver
@@ -54,6 +55,8 @@ class Flow:
         Sampled full states over the run, at ``times`` [s].
     times : ndarray (samples,)
         Sample times [s].
+    modes : ndarray (samples, mode size)
+        The hybrid mode at each sample.
     """
 
     end: np.ndarray
@@ -63,6 +66,7 @@ class Flow:
     guard_minimum: float
     states: np.ndarray
     times: np.ndarray
+    modes: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -96,6 +100,15 @@ class Orbit:
         Smallest sampled value of the contact guard over the orbit.
     monodromy : ndarray (u, u)
         The monodromy matrix.
+    force_minimum : float
+        The cam-follower's smallest normal force over the orbit, unclipped [N]
+        (:func:`~camdyn.continuation.margins.contact_margins`; NaN for a test model).
+    sliding_minimum : float
+        The cam-follower's smallest sliding velocity in contact, signed by the direction
+        of sliding [m/s] (NaN for a test model).
+    extent : ndarray (u,) or None
+        The largest magnitude of each unknown over the orbit (its units), the scale of
+        that unknown in the continuation.
     """
 
     state: np.ndarray
@@ -110,6 +123,9 @@ class Orbit:
     residual: float
     guard_minimum: float
     monodromy: np.ndarray
+    force_minimum: float = math.nan
+    sliding_minimum: float = math.nan
+    extent: np.ndarray | None = None
 
 
 def _full(problem: Problem, x: np.ndarray) -> np.ndarray:
@@ -120,8 +136,10 @@ def _full(problem: Problem, x: np.ndarray) -> np.ndarray:
 
 def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samples: int = 0) -> Flow:
     """Integrate the variational system from unknowns ``x`` at ``t_start`` over
-    ``periods`` forcing periods at the scalar parameter ``value`` (default the problem's).
-    Raises :class:`SimulationError` if the integrator stops."""
+    ``periods`` forcing periods at the scalar parameter ``value`` (default the problem's),
+    at the problem's matrix tolerances (:meth:`Problem.matrix_tolerances`; its end state
+    is only as accurate as those: residuals come from :func:`shoot`). Raises
+    :class:`SimulationError` if the integrator stops."""
     value = problem.value if value is None else float(value)
     p, period = problem.build(value)
     n = problem.template.size
@@ -132,8 +150,9 @@ def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samp
     count = max(samples, 2)
     times = np.linspace(t0, t1, count)
     start = np.concatenate([y0, np.eye(n).ravel()])
-    y, _, log, counters = driver.integrate(systems.VARIATIONAL + problem.system_id, p, start, t0, t1, times,
-                                           problem.rtol, problem.atol, period / 32.0, driver.METHOD_DOP853,
+    rtol, atol = problem.matrix_tolerances()
+    y, modes, log, counters = driver.integrate(systems.VARIATIONAL + problem.system_id, p, start, t0, t1, times,
+                                           rtol, atol, period / 32.0, driver.METHOD_DOP853,
                                            50_000_000, 100_000, True)
     status = int(counters[driver.COUNT_STATUS])
     if status == driver.STATUS_INTERRUPTED:
@@ -148,7 +167,7 @@ def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samp
     states = y[:, :n]
     matrix = y[-1, n:].reshape(n, n)[:u, :u].copy()
     return Flow(y[-1, :u].copy(), matrix, int(on_contact.sum()), int(counters[driver.COUNT_EVENTS]),
-                _guard_minimum(problem.system_id, p, times, states) if samples else math.nan, states, times)
+                _guard_minimum(problem.system_id, p, times, states) if samples else math.nan, states, times, modes)
 
 
 def _guard_minimum(system_id: int, p: np.ndarray, times: np.ndarray, states: np.ndarray) -> float:
@@ -213,15 +232,20 @@ def make_orbit(problem: Problem, x, value, periods, run: Flow, iterations, resid
     over ``periods`` forcing periods (sampled, for the guard's minimum)."""
     values = np.linalg.eigvals(run.matrix)
     values = values[np.argsort(-np.abs(values), kind="stable")]
-    _, period = problem.build(value)
+    p, period = problem.build(value)
+    force, sliding = contact_margins(problem.system_id, p, run.times, run.states, run.modes)
     return Orbit(np.asarray(x, float).copy(), _full(problem, x), float(value), float(periods * period), periods, values,
                  bool(np.all(np.abs(values) < 1.0 - STABILITY_MARGIN)), run.impacts, iterations, residual,
-                 run.guard_minimum, run.matrix)
+                 run.guard_minimum, run.matrix, force, sliding,
+                 np.max(np.abs(run.states[:, :problem.unknowns]), axis=0) if run.times.size > 2 else None)
 
 
 def find_orbit(problem: Problem, start=None, value: float | None = None, periods: int = 1, tolerance: float = 1e-10,
                max_iterations: int = 30, transient: int = 50) -> Orbit:
-    """A period-``periods`` orbit by Newton's method on the shooting residual.
+    """A period-``periods`` orbit by Newton's method on the shooting residual (by the plain
+    model, :func:`shoot`), its Jacobian ``M - I`` from a variational run renewed only when
+    the residual stops shrinking fourfold per step (a chord method otherwise), and the
+    multipliers from a variational run at the converged state.
 
     Parameters
     ----------
@@ -258,13 +282,18 @@ def find_orbit(problem: Problem, start=None, value: float | None = None, periods
             raise ParameterError(f"start must be {problem.unknowns} finite numbers")
     eye = np.eye(problem.unknowns)
     residual = np.full(problem.unknowns, math.inf)
+    matrix, previous = None, math.inf
     for iteration in range(max_iterations + 1):
-        run = flow(problem, x, value, periods, SAMPLES_PER_PERIOD * periods)
-        residual = run.end - x
-        if np.linalg.norm(residual) <= tolerance * (1.0 + np.linalg.norm(x)):
-            return make_orbit(problem, x, value, periods, run, iteration, float(np.linalg.norm(residual)))
+        residual = shoot(problem, x, value, periods) - x
+        size = float(np.linalg.norm(residual))
+        if size <= tolerance * (1.0 + np.linalg.norm(x)):
+            run = flow(problem, x, value, periods, SAMPLES_PER_PERIOD * periods)
+            return make_orbit(problem, x, value, periods, run, iteration, size)
         if iteration < max_iterations:
-            x = x + np.linalg.lstsq(run.matrix - eye, -residual, rcond=None)[0]
+            if matrix is None or not size < 0.25 * previous:      # chord steps while they contract fast
+                matrix = flow(problem, x, value, periods).matrix
+            previous = size
+            x = x + np.linalg.lstsq(matrix - eye, -residual, rcond=None)[0]
     unit = f" {problem.unit}" if problem.unit else ""
     raise SimulationError(f"no period-{periods} orbit found at {problem.name} = {value:g}{unit}: Newton's "
                           f"method did not converge in {max_iterations} iterations (last residual "
