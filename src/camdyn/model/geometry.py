@@ -8,7 +8,9 @@ centroid) turns counter-clockwise by ``Theta``.
 
 With the support function ``s(n) = sqrt(a^2 (n.e1)^2 + b^2 (n.e2)^2)`` the contact
 point, penetration and moment arm follow without root finding, unlike the thesis's
-slope matching (eqs 4.11-4.12).
+slope matching (eqs 4.11-4.12). A cam given by a profile table (slot ``CAM_SHAPE`` of
+:mod:`camdyn.model.layout`) takes the same quantities from its tabulated support function
+(:mod:`camdyn.model.rocking_profile`).
 """
 
 from __future__ import annotations
@@ -20,6 +22,13 @@ import numpy as np
 
 from camdyn.errors import GeometryError
 from camdyn.model import layout as L
+from camdyn.model.rocking_profile import (
+    contact_point_profile,
+    contact_point_rate_profile,
+    contact_rates_profile,
+    lift_extent,
+    reference_angle,
+)
 
 __all__ = ["cam_angle", "cam_acceleration", "contact_kinematics", "contact_point", "zero_state", "contact_point_rate",
            "contact_rates_trig", "penetrations", "rigid_angles"]
@@ -112,6 +121,8 @@ def contact_point(alpha, theta, p):
 def contact_point_trig(ca, sa, ct, st, p):
     """:func:`contact_point` from ``cos/sin`` of ``alpha`` and ``Theta`` (computed once by
     the right-hand side and shared with the spring and gravity terms)."""
+    if p[L.CAM_SHAPE] != L.ELLIPSE:
+        return contact_point_profile(ca, sa, ct, st, p)
     a = p[L.SEMI_A]
     b = p[L.SEMI_B]
     e = p[L.RUNOUT]
@@ -192,6 +203,8 @@ def contact_point_rate(alpha, alpha_dot, theta, theta_dot, p):
     sa = math.sin(alpha)
     ct = math.cos(theta)
     st = math.sin(theta)
+    if p[L.CAM_SHAPE] != L.ELLIPSE:
+        return contact_point_rate_profile(ca, sa, ct, st, alpha_dot, theta_dot, p)
     n1 = sa * ct + ca * st
     n2 = -sa * st + ca * ct
     a = p[L.SEMI_A]
@@ -220,6 +233,8 @@ def contact_rates_trig(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_d
         ``(delta [m], vr [m/s], delta_dot [m/s], vr_dot [m/s^2], delta_ddot [m/s^2])``;
         the rates are NaN when ``alpha_ddot`` is NaN (unknown).
     """
+    if p[L.CAM_SHAPE] != L.ELLIPSE:
+        return contact_rates_profile(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_ddot, p)
     delta, chi, rho_c, xc, yc = contact_point_trig(ca, sa, ct, st, p)
     a = p[L.SEMI_A]
     b = p[L.SEMI_B]
@@ -274,6 +289,13 @@ def zero_state(system) -> tuple[float, float]:
     ``h + rc`` with no runout in the touching condition), ``"auto"`` the first for a
     circle and the second for an ellipse.
 
+    A cam given by a profile (``system.profile``): the follower touches the cam where
+    its support function is ``h(theta*)``, ``PEx sin a0 + PEy cos a0 = h + h(theta*)``, and
+    ``Theta0 = theta* + pi/2 - a0`` (:mod:`camdyn.model.rocking_profile`, eq R1), with
+    ``theta*`` the maximum lift (``"maximum-lift"``, and ``"auto"``) or ``-pi/2``
+    (``"runout-parallel"``: the eccentric circle's runout along the follower); both give
+    the circle's 0-states for :func:`camdyn.model.profiles.eccentric_circle`.
+
     Raises
     ------
     GeometryError
@@ -281,6 +303,8 @@ def zero_state(system) -> tuple[float, float]:
     """
     c, f = system.cam, system.follower
     h = f.surface_offset
+    if system.profile is not None:
+        return _profile_zero_state(system)
     lift = system.motion.zero_state == "maximum-lift" or (system.motion.zero_state == "auto" and c.is_circle)
     rhs = h + c.semi_major + c.runout if lift else h + c.semi_minor
     r = math.hypot(c.pivot_x, c.pivot_y)
@@ -292,3 +316,26 @@ def zero_state(system) -> tuple[float, float]:
     a0 = math.asin(rhs / r) - phase             # the root with the bar nearest horizontal
     theta0 = math.pi / 2 - a0 if lift else -a0
     return a0, theta0
+
+
+def _profile_zero_state(system) -> tuple[float, float]:
+    """:func:`zero_state` of a cam given by a profile."""
+    c, profile = system.cam, system.profile
+    theta_star = reference_angle(profile, system.motion.zero_state != "runout-parallel")
+    rhs = system.follower.surface_offset + profile.base_radius + float(profile.lift(theta_star)[0][0])
+    r = math.hypot(c.pivot_x, c.pivot_y)
+    if rhs > r:
+        raise GeometryError(
+            f"the cam cannot reach the follower: the cam pivot is {r*1e3:.3g} mm from the follower pivot, "
+            f"but contact needs {rhs*1e3:.3g} mm (surface offset + the profile's base radius and lift)")
+    phase = math.atan2(c.pivot_y, c.pivot_x)
+    a0 = math.asin(rhs / r) - phase
+    return a0, (theta_star + math.pi / 2) - a0
+
+
+def profile_reach(profile) -> tuple[float, float, float]:
+    """``(lift range [m], lowest h' [m/rad], highest h' [m/rad])`` of a cam profile: how
+    far its support function and so the moment arm (``chi = u.E - h'``, eq R3 of
+    :mod:`camdyn.model.rocking_profile`) move over a revolution."""
+    h_min, h_max, slope_min, slope_max = lift_extent(profile)
+    return h_max - h_min, slope_min, slope_max
