@@ -55,15 +55,37 @@ import numpy as np
 
 from camdyn.errors import GeometryError
 from camdyn.model import layout as L
-from camdyn.model.profiles import evaluate
+from camdyn.model.lift_laws import segment_values
+from camdyn.model.profiles import ROW, TWO_PI
 
-__all__ = ["support", "contact_point_profile", "contact_rates_profile", "contact_point_rate_profile",
+__all__ = ["lift_at", "support", "contact_point_profile", "contact_rates_profile", "contact_point_rate_profile",
            "reference_angle", "lift_extent"]
 
 HALF_PI = 0.5 * math.pi
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
+def lift_at(p, start, theta):
+    """:func:`camdyn.model.profiles.evaluate` of the table at ``p[start:]``, compiled into
+    its caller: the lift [m] and its first three derivatives in the cam angle at
+    ``theta`` [rad]. The table's numbers go to the segment one by one, so that the
+    integrator's inlined loop passes no array to a call (which cost the ellipse's path
+    its reference counting: 10 %, measured)."""
+    n = int(p[start])
+    angle = theta % TWO_PI
+    lo = 0
+    hi = n - 1
+    while lo < hi:   # the last row whose start is <= angle
+        mid = (lo + hi + 1) // 2
+        if p[start + 1 + mid * ROW + 1] <= angle:
+            lo = mid
+        else:
+            hi = mid - 1
+    r = start + 1 + lo * ROW
+    return segment_values(p[r], p[r + 1], p[r + 2], p[r + 3], p[r + 4], p[r + 5], p[r + 6], p[r + 7], angle)
+
+
+@numba.njit(cache=True, inline="always")
 def support(ca, sa, ct, st, p):
     """Support function ``h`` [m] of the cam about E and its derivatives ``h'`` [m/rad],
     ``h''`` [m/rad^2] at the normal's angle ``phi = alpha + Theta``, through (R1), from
@@ -71,11 +93,11 @@ def support(ca, sa, ct, st, p):
     n1 = sa * ct + ca * st              # n . e1 = sin(phi)
     n2 = -sa * st + ca * ct             # n . e2 = cos(phi)
     theta = math.atan2(n1, n2) - HALF_PI   # (R1)
-    s, s1, s2, s3 = evaluate(p, int(p[L.PROFILE_START]), theta)
+    s, s1, s2, s3 = lift_at(p, int(p[L.PROFILE_START]), theta)
     return p[L.BASE_RADIUS] + s, s1, s2
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def contact_point_profile(ca, sa, ct, st, p):
     """``(delta [m], chi [m], rho_c [m], xc [m], yc [m])`` of
     :func:`camdyn.model.geometry.contact_point_trig` for a cam of shape
@@ -90,7 +112,7 @@ def contact_point_profile(ca, sa, ct, st, p):
     return delta, chi, h + h2, xc, yc                  # (R4)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def contact_rates_profile(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_ddot, p):
     """The guards and their rates of :func:`camdyn.model.geometry.contact_rates_trig` for
     a cam of shape :data:`~camdyn.model.layout.PROFILE_TABLE`: eqs (R5)-(R8); the same
@@ -112,7 +134,7 @@ def contact_rates_profile(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, thet
     return delta, vr, delta_dot, vr_dot, delta_ddot
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def contact_point_rate_profile(ca, sa, ct, st, alpha_dot, theta_dot, p):
     """``chi_dot`` [m/s] of :func:`camdyn.model.geometry.contact_point_rate` for a cam of
     shape :data:`~camdyn.model.layout.PROFILE_TABLE`: eq (R7)."""
