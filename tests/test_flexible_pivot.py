@@ -209,3 +209,13 @@ def test_bad_followers_and_motions_are_refused(rig):
         simulate_flexible_pivot("sundar2014-impact", 1e7, 1.0)
     with pytest.raises(ParameterError, match="rtol"):
         simulate_flexible_pivot(rig, 1e7, 1.0, rtol=0.5)
+
+
+def test_a_cam_profile_table_is_refused():
+    import dataclasses
+
+    from camdyn.model.profiles import eccentric_circle
+    system = camdyn.load_system("sundar2014-impact")
+    on_profile = dataclasses.replace(system, profile=eccentric_circle(system.cam.semi_major, system.cam.runout))
+    with pytest.raises(ParameterError, match="profile"):
+        simulate_flexible_pivot(on_profile, 2e7, 200.0)

@@ -8,7 +8,9 @@ centroid) turns counter-clockwise by ``Theta``.
 
 With the support function ``s(n) = sqrt(a^2 (n.e1)^2 + b^2 (n.e2)^2)`` the contact
 point, penetration and moment arm follow without root finding, unlike the thesis's
-slope matching (eqs 4.11-4.12).
+slope matching (eqs 4.11-4.12). A cam given by a profile table (slot ``CAM_SHAPE`` of
+:mod:`camdyn.model.layout`) takes the same quantities from its tabulated support function
+(:mod:`camdyn.model.rocking_profile`).
 """
 
 from __future__ import annotations
@@ -20,6 +22,13 @@ import numpy as np
 
 from camdyn.errors import GeometryError
 from camdyn.model import layout as L
+from camdyn.model.rocking_profile import (
+    contact_point_profile,
+    contact_point_rate_profile,
+    contact_rates_profile,
+    lift_extent,
+    reference_angle,
+)
 
 __all__ = ["cam_angle", "cam_acceleration", "contact_kinematics", "contact_point", "zero_state", "contact_point_rate",
            "contact_rates_trig", "penetrations", "rigid_angles", "contact_point_from", "contact_kinematics_from",
@@ -113,6 +122,8 @@ def contact_point(alpha, theta, p):
 def contact_point_trig(ca, sa, ct, st, p):
     """:func:`contact_point` from ``cos/sin`` of ``alpha`` and ``Theta`` (computed once by
     the right-hand side and shared with the spring and gravity terms)."""
+    if p[L.CAM_SHAPE] != L.ELLIPSE:
+        return contact_point_profile(ca, sa, ct, st, p)
     return contact_point_from(ca, sa, ct, st, p[L.PIVOT_X], p[L.PIVOT_Y], p)
 
 
@@ -120,7 +131,7 @@ def contact_point_trig(ca, sa, ct, st, p):
 def contact_point_from(ca, sa, ct, st, ex, ey, p):
     """:func:`contact_point_trig` with the cam pivot E at ``(ex, ey)`` [m] from the
     follower pivot instead of ``p``'s ``(PE_x, PE_y)`` (a follower whose pivot moves,
-    :mod:`camdyn.model.flexible_pivot`)."""
+    :mod:`camdyn.model.flexible_pivot`; an ellipse only)."""
     a = p[L.SEMI_A]
     b = p[L.SEMI_B]
     e = p[L.RUNOUT]
@@ -185,8 +196,12 @@ def contact_kinematics_trig(ca, sa, ct, st, alpha_dot, theta_dot, p):
 @numba.njit(cache=True, inline="always")
 def contact_kinematics_from(ca, sa, ct, st, alpha_dot, theta_dot, ex, ey, p):
     """:func:`contact_kinematics_trig` with the cam pivot E at ``(ex, ey)`` [m] from the
-    follower pivot (:func:`contact_point_from`); the rates are those of a pivot at rest."""
-    delta, chi, rho_c, xc, yc = contact_point_from(ca, sa, ct, st, ex, ey, p)
+    follower pivot (:func:`contact_point_from`; a profile table's cam turns about ``p``'s
+    pivot); the rates are those of a pivot at rest."""
+    if p[L.CAM_SHAPE] != L.ELLIPSE:
+        delta, chi, rho_c, xc, yc = contact_point_profile(ca, sa, ct, st, p)
+    else:
+        delta, chi, rho_c, xc, yc = contact_point_from(ca, sa, ct, st, ex, ey, p)
     vx = -theta_dot * (yc - ey)   # v_cam = Theta_dot z x (Xc - E)
     vy = theta_dot * (xc - ex)
     n_v = sa * vx + ca * vy
@@ -208,6 +223,8 @@ def contact_point_rate(alpha, alpha_dot, theta, theta_dot, p):
     sa = math.sin(alpha)
     ct = math.cos(theta)
     st = math.sin(theta)
+    if p[L.CAM_SHAPE] != L.ELLIPSE:
+        return contact_point_rate_profile(ca, sa, ct, st, alpha_dot, theta_dot, p)
     n1 = sa * ct + ca * st
     n2 = -sa * st + ca * ct
     a = p[L.SEMI_A]
@@ -236,6 +253,8 @@ def contact_rates_trig(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_d
         ``(delta [m], vr [m/s], delta_dot [m/s], vr_dot [m/s^2], delta_ddot [m/s^2])``;
         the rates are NaN when ``alpha_ddot`` is NaN (unknown).
     """
+    if p[L.CAM_SHAPE] != L.ELLIPSE:
+        return contact_rates_profile(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_ddot, p)
     return contact_rates_from(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_ddot,
                               p[L.PIVOT_X], p[L.PIVOT_Y], p)
 
@@ -243,7 +262,8 @@ def contact_rates_trig(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_d
 @numba.njit(cache=True, inline="always")
 def contact_rates_from(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_ddot, ex, ey, p):
     """:func:`contact_rates_trig` with the cam pivot E at ``(ex, ey)`` [m] from the
-    follower pivot (:func:`contact_point_from`); the rates are those of a pivot at rest."""
+    follower pivot (:func:`contact_point_from`; an ellipse only); the rates are those of
+    a pivot at rest."""
     delta, chi, rho_c, xc, yc = contact_point_from(ca, sa, ct, st, ex, ey, p)
     a = p[L.SEMI_A]
     b = p[L.SEMI_B]
@@ -298,6 +318,13 @@ def zero_state(system) -> tuple[float, float]:
     ``h + rc`` with no runout in the touching condition), ``"auto"`` the first for a
     circle and the second for an ellipse.
 
+    A cam given by a profile (``system.profile``): the follower touches the cam where
+    its support function is ``h(theta*)``, ``PEx sin a0 + PEy cos a0 = h + h(theta*)``, and
+    ``Theta0 = theta* + pi/2 - a0`` (:mod:`camdyn.model.rocking_profile`, eq R1), with
+    ``theta*`` the maximum lift (``"maximum-lift"``, and ``"auto"``) or ``-pi/2``
+    (``"runout-parallel"``: the eccentric circle's runout along the follower); both give
+    the circle's 0-states for :func:`camdyn.model.profiles.eccentric_circle`.
+
     Raises
     ------
     GeometryError
@@ -305,6 +332,8 @@ def zero_state(system) -> tuple[float, float]:
     """
     c, f = system.cam, system.follower
     h = f.surface_offset
+    if system.profile is not None:
+        return _profile_zero_state(system)
     lift = system.motion.zero_state == "maximum-lift" or (system.motion.zero_state == "auto" and c.is_circle)
     rhs = h + c.semi_major + c.runout if lift else h + c.semi_minor
     r = math.hypot(c.pivot_x, c.pivot_y)
@@ -316,3 +345,26 @@ def zero_state(system) -> tuple[float, float]:
     a0 = math.asin(rhs / r) - phase             # the root with the bar nearest horizontal
     theta0 = math.pi / 2 - a0 if lift else -a0
     return a0, theta0
+
+
+def _profile_zero_state(system) -> tuple[float, float]:
+    """:func:`zero_state` of a cam given by a profile."""
+    c, profile = system.cam, system.profile
+    theta_star = reference_angle(profile, system.motion.zero_state != "runout-parallel")
+    rhs = system.follower.surface_offset + profile.base_radius + float(profile.lift(theta_star)[0][0])
+    r = math.hypot(c.pivot_x, c.pivot_y)
+    if rhs > r:
+        raise GeometryError(
+            f"the cam cannot reach the follower: the cam pivot is {r*1e3:.3g} mm from the follower pivot, "
+            f"but contact needs {rhs*1e3:.3g} mm (surface offset + the profile's base radius and lift)")
+    phase = math.atan2(c.pivot_y, c.pivot_x)
+    a0 = math.asin(rhs / r) - phase
+    return a0, (theta_star + math.pi / 2) - a0
+
+
+def profile_reach(profile) -> tuple[float, float, float]:
+    """``(lift range [m], lowest h' [m/rad], highest h' [m/rad])`` of a cam profile: how
+    far its support function and so the moment arm (``chi = u.E - h'``, eq R3 of
+    :mod:`camdyn.model.rocking_profile`) move over a revolution."""
+    h_min, h_max, slope_min, slope_max = lift_extent(profile)
+    return h_max - h_min, slope_min, slope_max

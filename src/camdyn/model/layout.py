@@ -69,7 +69,14 @@ TABLE_START = 37    # slot of the first spline coefficient of a tabulated motion
 TABLE_INTERVALS = 38  # number of spline intervals over the table's period [-]
 TABLE_PERIOD = 39   # period of the tabulated motion [s]
 TABLE_DRIFT = 40    # mean cam speed of the tabulated motion, (Theta(T) - Theta(0)) / T [rad/s]
-SIZE = 41
+# cam shape
+CAM_SHAPE = 41      # 0 the ellipse of SEMI_A, SEMI_B, RUNOUT; 1 a profile table (camdyn.model.rocking_profile)
+PROFILE_START = 42  # slot of the profile table (camdyn.model.profiles) of a cam of shape 1 [-]
+BASE_RADIUS = 43    # base circle radius r_base of a cam of shape 1 [m]
+SIZE = 44
+#: Values of the CAM_SHAPE slot.
+ELLIPSE = 0.0
+PROFILE_TABLE = 1.0
 
 #: Mode slots passed with the state to the right-hand side (hybrid-system mode).
 MODE_CONTACT = 0     # 1 in contact, 0 free flight
@@ -112,6 +119,9 @@ def pack(system: System, viscous_c: float = 0.0, initial_angle: float | None = N
         by :func:`camdyn.model.equilibrium.viscous_coefficient`).
     initial_angle : float, optional
         Cam angle ``Theta0`` [rad]; defaults to ``system.motion.initial_angle``.
+
+    A cam given by a profile (``system.profile``) is packed as shape
+    :data:`PROFILE_TABLE`, its table appended after the :data:`SIZE` slots.
     """
     s = system
     p = np.zeros(SIZE)
@@ -130,4 +140,9 @@ def pack(system: System, viscous_c: float = 0.0, initial_angle: float | None = N
     p[OMEGA_C] = 2.0 * math.pi * s.motion.frequency * s.motion.direction
     p[START_OMEGA] = 2.0 * math.pi * s.motion.start_speed * s.motion.direction
     p[RAMP_TIME] = s.motion.ramp_time
+    if s.profile is not None:
+        p[CAM_SHAPE] = PROFILE_TABLE
+        p[PROFILE_START] = SIZE
+        p[BASE_RADIUS] = s.profile.base_radius
+        p = np.concatenate([p, s.profile.table])
     return p

@@ -103,18 +103,25 @@ def segment(row, theta):
     s0``; for a rise or return ``(s0, L)``; for an arc ``(d, phi_c, rho, form, r_base)``;
     for a cubic ``(c0, c1, c2, c3)``.
     """
-    kind = int(row[0])
-    t = theta - row[1]
+    return segment_values(row[0], row[1], row[2], row[3], row[4], row[5], row[6], row[7], theta)
+
+
+@numba.njit(cache=True)
+def segment_values(kind_code, start, span, a0, a1, a2, a3, a4, theta):
+    """:func:`segment` from the row's numbers ``(kind, theta_start, span, a0, ..., a4)``
+    passed one by one (no array: a caller compiled into the integrator's loop passes
+    no array to a call)."""
+    kind = int(kind_code)
+    t = theta - start
     if kind == DWELL:
-        return row[3], 0.0, 0.0, 0.0
+        return a0, 0.0, 0.0, 0.0
     if kind == ARC:
-        h, h1, h2, h3 = arc(theta - row[4], row[3], row[5], row[6])
-        return h - row[7], h1, h2, h3
+        h, h1, h2, h3 = arc(theta - a1, a0, a2, a3)
+        return h - a4, h1, h2, h3
     if kind == CUBIC:
-        c0, c1, c2, c3 = row[3], row[4], row[5], row[6]
+        c0, c1, c2, c3 = a0, a1, a2, a3
         return (c0 + t * (c1 + t * (c2 + t * c3)), c1 + t * (2.0 * c2 + 3.0 * c3 * t), 2.0 * c2 + 6.0 * c3 * t,
                 6.0 * c3)
-    span = row[2]
     f0, f1, f2, f3 = normalised(kind, t / span)
-    lift = row[4]
-    return row[3] + lift * f0, lift * f1 / span, lift * f2 / span ** 2, lift * f3 / span ** 3
+    lift = a1
+    return a0 + lift * f0, lift * f1 / span, lift * f2 / span ** 2, lift * f3 / span ** 3

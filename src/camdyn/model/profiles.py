@@ -97,6 +97,18 @@ class Profile:
         out = np.array([evaluate(self.table, 0, a) for a in angles]).reshape(angles.shape + (4,))
         return tuple(out[..., i] for i in range(4))
 
+    def __eq__(self, other):
+        """Equal profiles: the same table, radii, follower and offset (the table compared
+        by value, so that systems holding equal profiles compare equal)."""
+        if not isinstance(other, Profile):
+            return NotImplemented
+        return (self.base_radius, self.follower, self.roller_radius, self.offset) == (
+            other.base_radius, other.follower, other.roller_radius, other.offset) and np.array_equal(
+            self.table, other.table)
+
+    def __hash__(self):
+        return hash((self.table.tobytes(), self.base_radius, self.follower, self.roller_radius, self.offset))
+
     @property
     def joints(self):
         """Start angles of the segments [rad]."""

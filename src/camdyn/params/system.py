@@ -395,6 +395,22 @@ class Motion:
         return math.inf if f == 0 else 1.0 / f
 
 
+def _check_profile(profile) -> None:
+    """Refuse a cam profile the rocking follower cannot ride: anything but a profile of
+    :mod:`camdyn.model.profiles` (read by its attributes: this layer imports no model), or
+    one made for a roller or knife-edge follower (the rocking follower has a flat face)."""
+    if profile is None:
+        return
+    follower = getattr(profile, "follower", None)
+    table = getattr(profile, "table", None)
+    if not isinstance(follower, str) or table is None or not hasattr(profile, "base_radius"):
+        raise ParameterError(f"profile must be a cam profile of camdyn.model.profiles (e.g. eccentric_circle(...)), "
+                             f"got {type(profile).__name__}")
+    if follower != "flat":
+        raise ParameterError(f"the rocking follower has a flat face: its cam profile must be made for a flat-faced "
+                             f"follower (follower='flat'), not for a {follower} follower")
+
+
 @dataclass(frozen=True)
 class System:
     """A complete cam-follower system: geometry, contact, friction, spring and motion.
@@ -407,6 +423,12 @@ class System:
         Source of the parameter values.
     gravity : float
         Gravitational acceleration ``g`` [m/s^2].
+    profile : camdyn.model.profiles.Profile or None
+        The cam's shape as a profile table made for a flat-faced follower (e.g.
+        ``eccentric_circle``, ``rise_return_profile``, ``tabulated_profile``), in place of
+        the ellipse of ``cam.semi_major``, ``cam.semi_minor`` and ``cam.runout``, which it
+        overrides; the cam's pivot and material still come from ``cam``. None (the
+        default): the ellipse. See docs/profiles.md, "The rocking follower on a profile".
     """
 
     cam: Cam = group(Cam, required=True)
@@ -418,11 +440,13 @@ class System:
     gravity: float = parameter("m/s**2", "gravitational acceleration g", 9.81, table="environment")
     name: str = "custom"
     citation: str = ""
+    profile: object = None
 
     def __post_init__(self):
         if not math.isfinite(self.gravity):
             raise ParameterError("environment.gravity must be finite")
         _nonnegative("environment", "gravity", self.gravity)
+        _check_profile(self.profile)
         # The follower's contact line must pass below the cam pivot region: the cam
         # pivot has to be on the cam's side of the follower (docs/model.md §1: cam above).
         h = self.follower.surface_offset

@@ -71,6 +71,9 @@ def chapter3_flexible_pivot() -> FlexiblePivotRig:
 
 def _check_bearing(system, pivot_stiffness, pivot_damping) -> tuple[float, float]:
     limits.check_system(system)
+    if system.profile is not None:
+        raise ParameterError("the flexible pivot runs on an elliptic or circular cam (cam.semi_major, "
+                             "cam.semi_minor), not on a cam profile table")
     kp = limits.check_number("pivot_stiffness", pivot_stiffness, "N/m")
     cp = limits.check_number("pivot_damping", pivot_damping, "N s/m")
     if not (math.isfinite(kp) and kp > 0.0):
@@ -208,8 +211,9 @@ def simulate_flexible_pivot(system: System, pivot_stiffness: float, pivot_dampin
     ------
     ParameterError
         For a bearing that is not finite and positive (stiffness) or non-negative
-        (damping), a follower without inertia about its centre of gravity, a motion that
-        is not constant, or bad run settings; all before any work.
+        (damping), a follower without inertia about its centre of gravity, a cam given as
+        a profile table, a motion that is not constant, or bad run settings; all before
+        any work.
     """
     kp, cp = _check_bearing(system, pivot_stiffness, pivot_damping)
     speed = system.motion.angular_speed

@@ -202,6 +202,8 @@ def simulate_driven_cam(system: System, drive: CamDrive, revolutions: float = 5.
         For an oscillating cam motion, or bad run settings.
     """
     limits.check_system(system)
+    if system.profile is not None:
+        raise ParameterError("the driven cam takes an elliptic or circular cam, not a cam profile (system.profile)")
     if system.motion.kind != "constant":
         raise ParameterError("a driven cam starts from a constant motion (motion.kind = 'constant'); "
                              f"got {system.motion.kind!r}")
@@ -397,7 +399,7 @@ def simulate_tabulated(system: System, times, angles, periods: float = 5.0, dura
     prep = prepare(s)
     p = np.r_[prep.p, coefficients]
     p[L.MOTION_KIND] = 3.0
-    p[L.TABLE_START] = L.SIZE
+    p[L.TABLE_START] = prep.p.size   # after a cam profile's table, if any
     p[L.TABLE_INTERVALS] = coefficients.size // 4
     p[L.TABLE_PERIOD] = period
     p[L.TABLE_DRIFT] = mean_speed
