@@ -12,6 +12,7 @@ import functools
 import os
 import signal
 import sys
+import threading
 import warnings
 
 import typer
@@ -100,14 +101,26 @@ def _on_signal(signum, frame):
     raise KeyboardInterrupt
 
 
+#: Delay [s] before an interrupt swallowed in the main thread is delivered again.
+REDELIVERY_DELAY = 0.01
+
+
 def _quiet_unraisable(unraisable) -> None:
     """Drop the 'Exception ignored' report of an interrupt inside a C callback, and deliver
     the interrupt again to the main thread (the callback swallowed it: the command would
-    otherwise run on to its end)."""
+    otherwise run on to its end). In the main thread itself the delivery waits until this
+    hook has returned: a signal handler run inside the hook would raise there, where
+    Python ignores the exception and prints it with its traceback."""
     if not isinstance(unraisable.exc_value, KeyboardInterrupt):
         sys.__unraisablehook__(unraisable)
     elif _interrupt["arrived"]:
-        _thread.interrupt_main(int(_interrupt["signal"]))
+        number = int(_interrupt["signal"])
+        if threading.current_thread() is threading.main_thread():
+            later = threading.Timer(REDELIVERY_DELAY, _thread.interrupt_main, args=(number,))
+            later.daemon = True
+            later.start()
+        else:
+            _thread.interrupt_main(number)
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
