@@ -25,6 +25,7 @@ def test_an_interrupt_swallowed_in_the_main_thread_arrives_after_the_hook(monkey
     assert threading.current_thread() is threading.main_thread()
     monkeypatch.setitem(app._interrupt, "signal", signal.SIGINT)
     monkeypatch.setitem(app._interrupt, "arrived", True)
+    monkeypatch.setitem(app._interrupt, "active", True)
     previous = signal.signal(signal.SIGINT, app._on_signal)
     try:
         swallowed = types.SimpleNamespace(exc_type=KeyboardInterrupt, exc_value=KeyboardInterrupt(),
@@ -47,6 +48,20 @@ def test_no_interrupt_is_delivered_when_none_arrived(monkeypatch):
     try:
         app._quiet_unraisable(types.SimpleNamespace(exc_type=KeyboardInterrupt, exc_value=KeyboardInterrupt(),
                                                     exc_traceback=None, err_msg=None, object=None))
+        delivered = _wait_for_interrupt(0.3)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert not delivered
+
+
+def test_no_interrupt_is_delivered_once_the_command_has_ended(monkeypatch):
+    monkeypatch.setitem(app._interrupt, "arrived", True)
+    monkeypatch.setitem(app._interrupt, "active", True)
+    previous = signal.signal(signal.SIGINT, app._on_signal)
+    try:
+        app._quiet_unraisable(types.SimpleNamespace(exc_type=KeyboardInterrupt, exc_value=KeyboardInterrupt(),
+                                                    exc_traceback=None, err_msg=None, object=None))
+        app._interrupt["active"] = False        # main() reports how the command ended
         delivered = _wait_for_interrupt(0.3)
     finally:
         signal.signal(signal.SIGINT, previous)

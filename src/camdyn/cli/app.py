@@ -29,7 +29,7 @@ except ImportError:  # pragma: no cover
 
 #: The interrupt of the current command: its signal and, for a sweep, the exception that
 #: says how to resume (typer turns KeyboardInterrupt into exit status 130 and drops it).
-_interrupt = {"signal": signal.SIGINT, "exception": None, "arrived": False}
+_interrupt = {"signal": signal.SIGINT, "exception": None, "arrived": False, "active": False, "later": None}
 
 
 def _interruptible(command):
@@ -116,11 +116,19 @@ def _quiet_unraisable(unraisable) -> None:
     elif _interrupt["arrived"]:
         number = int(_interrupt["signal"])
         if threading.current_thread() is threading.main_thread():
-            later = threading.Timer(REDELIVERY_DELAY, _thread.interrupt_main, args=(number,))
+            later = threading.Timer(REDELIVERY_DELAY, _deliver, args=(number,))
             later.daemon = True
+            _interrupt["later"] = later
             later.start()
         else:
             _thread.interrupt_main(number)
+
+
+def _deliver(number: int) -> None:
+    """The interrupt, delivered to the main thread while a command still runs (not once
+    :func:`main` has restored the previous handlers and is reporting how it ended)."""
+    if _interrupt["active"]:
+        _thread.interrupt_main(number)
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
@@ -143,7 +151,7 @@ def main(argv=None) -> int:
     error); 130 interrupted by Ctrl-C (143 by SIGTERM). Set ``CAMDYN_DEBUG=1`` to see the
     traceback of an unexpected error.
     """
-    _interrupt.update(signal=signal.SIGINT, exception=None, arrived=False)
+    _interrupt.update(signal=signal.SIGINT, exception=None, arrived=False, active=True, later=None)
     hooks = warnings.showwarning, sys.unraisablehook
     warnings.showwarning, sys.unraisablehook = _show_warning, _quiet_unraisable
     previous = {}
@@ -181,6 +189,9 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return 1
     finally:
+        _interrupt["active"] = False
+        if _interrupt["later"] is not None:
+            _interrupt["later"].cancel()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         warnings.showwarning, sys.unraisablehook = hooks
