@@ -23,6 +23,7 @@ from camdyn.continuation.margins import contact_margins
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.integrator import driver
+from camdyn.simulation import limits
 from camdyn.systems import registry as systems
 
 __all__ = ["Flow", "Orbit", "flow", "find_orbit", "make_orbit", "shoot", "transient_state", "STABILITY_MARGIN"]
@@ -154,11 +155,7 @@ def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samp
     y, modes, log, counters = driver.integrate(systems.VARIATIONAL + problem.system_id, p, start, t0, t1, times,
                                            rtol, atol, period / 32.0, driver.METHOD_DOP853,
                                            50_000_000, 100_000, True)
-    status = int(counters[driver.COUNT_STATUS])
-    if status == driver.STATUS_INTERRUPTED:
-        raise KeyboardInterrupt
-    if status != driver.STATUS_OK:
-        raise SimulationError(f"shooting run at {problem.name} = {value:g} {driver.STATUS_MESSAGES[status]}")
+    limits.check_run(counters, f"shooting run at {problem.name} = {value:g}")
     on_contact = log[:, driver.EVENT_GUARD] == 0
     if not problem.impacts:
         on_contact &= False
@@ -198,11 +195,7 @@ def shoot(problem: Problem, x, value: float, periods: int = 1) -> np.ndarray:
     y, _, _, counters = driver.integrate(problem.system_id, p, _full(problem, np.asarray(x, dtype=float)), t0, t1,
                                          np.array([t1]), problem.rtol, problem.atol, period / 32.0,
                                          driver.METHOD_DOP853, 50_000_000, 100_000, True)
-    status = int(counters[driver.COUNT_STATUS])
-    if status == driver.STATUS_INTERRUPTED:
-        raise KeyboardInterrupt
-    if status != driver.STATUS_OK:
-        raise SimulationError(f"shooting run at {problem.name} = {value:g} {driver.STATUS_MESSAGES[status]}")
+    limits.check_run(counters, f"shooting run at {problem.name} = {value:g}")
     return y[-1, :problem.unknowns].copy()
 
 
@@ -219,11 +212,7 @@ def transient_state(problem: Problem, periods: int = 50, value: float | None = N
     y, _, _, counters = driver.integrate(problem.system_id, p, problem.template.copy(), t0, t1, np.array([t1]),
                                          problem.rtol * 100, problem.atol * 100, period / 32.0,
                                          driver.METHOD_DOP853, 50_000_000, 100_000, True)
-    status = int(counters[driver.COUNT_STATUS])
-    if status == driver.STATUS_INTERRUPTED:
-        raise KeyboardInterrupt
-    if status != driver.STATUS_OK:
-        raise SimulationError(f"transient run {driver.STATUS_MESSAGES[status]}")
+    limits.check_run(counters, "transient run")
     return y[-1, :problem.unknowns].copy()
 
 

@@ -13,7 +13,7 @@ import time as _time
 import numpy as np
 import xarray as xr
 
-from camdyn.errors import ParameterError, SimulationError
+from camdyn.errors import ParameterError
 from camdyn.integrator import driver
 from camdyn.model import driven_cam, stick_slip
 from camdyn.params.system import System
@@ -143,11 +143,7 @@ def _run_counters(system_id, p, y0, duration, sample_rate, period, rtol, atol, m
                                                   float(atol), float(max_step), METHODS[method], 50_000_000,
                                                   max_events, True)
     elapsed = _time.perf_counter() - start
-    status = int(counters[driver.COUNT_STATUS])
-    if status == driver.STATUS_INTERRUPTED:
-        raise KeyboardInterrupt
-    if status != driver.STATUS_OK:
-        raise SimulationError(f"simulation {driver.STATUS_MESSAGES[status]}")
+    limits.check_run(counters, "simulation")
     return t_out, y, modes, events, counters, elapsed
 
 

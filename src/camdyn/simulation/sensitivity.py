@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from camdyn.errors import ParameterError, SimulationError
+from camdyn.errors import ParameterError
 from camdyn.integrator import driver
 from camdyn.params.schema import parameter_index
 from camdyn.params.system import System
@@ -101,11 +101,7 @@ def integrate_variational(system_id: int, p: np.ndarray, y0, t_start: float, t_e
                                               float(t_start), float(t_end), np.array([float(t_end)]), float(rtol),
                                               float(atol), float(min(max_step, t_end - t_start)),
                                               driver.METHOD_DOP853, int(max_steps), int(max_events), True)
-    status = int(counters[driver.COUNT_STATUS])
-    if status == driver.STATUS_INTERRUPTED:
-        raise KeyboardInterrupt
-    if status != driver.STATUS_OK:
-        raise SimulationError(f"sensitivity run {driver.STATUS_MESSAGES[status]}")
+    limits.check_run(counters, "sensitivity run")
     end = y[-1]
     return Sensitivity(float(t_end), end[:n].copy(), end[n:n + n * n].reshape(n, n).copy(),
                        int(counters[driver.COUNT_EVENTS]), end[n + n * n:].reshape(count, n).T.copy(),

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from camdyn.errors import ParameterError, SimulationError
+from camdyn.errors import ParameterError
 from camdyn.integrator import driver
 from camdyn.model import translating_follower as model
 from camdyn.model.profiles import (
@@ -302,11 +302,7 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
                                                   float(rtol), float(atol), float(max_step), driver.METHOD_AUTO,
                                                   int(max_steps), int(max_events), True)
     elapsed = _time.perf_counter() - start
-    status = int(counters[driver.COUNT_STATUS])
-    if status == driver.STATUS_INTERRUPTED:
-        raise KeyboardInterrupt
-    if status != driver.STATUS_OK:
-        raise SimulationError(f"simulation {driver.STATUS_MESSAGES[status]}")
+    limits.check_run(counters, "simulation")
     return _dataset(follower, p, t_out, y, modes, events, counters, elapsed, speed, phase, rtol, atol)
 
 
