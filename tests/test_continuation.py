@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 from scipy.linalg import expm
-from scipy.optimize import brentq, fsolve
+from scipy.optimize import brentq, fsolve, minimize_scalar
 
 from camdyn.continuation import find_orbit, model_problem
 from camdyn.continuation.branches import continue_orbits
@@ -345,3 +345,43 @@ def test_branch_figure_draws_unstable_dashed_and_is_readable(tmp_path, monkeypat
     assert problems == [] and ("-", 12.0) in styles and len(dots) == 1, (problems, styles)
     np.testing.assert_allclose(dots[0].get_ydata(), math.degrees(0.07))
     np.testing.assert_allclose(dots[0].get_xdata(), np.repeat(np.linspace(10.0, 20.0, 6), 3))
+
+
+def test_rigid_impact_branch_turns_round_the_fold_of_the_closed_form():
+    # Wall beyond the rest position (sigma = 1.5): the one-impact orbit born at grazing is
+    # unstable, and its forcing frequency W(v), written in closed form against the rebound
+    # velocity v, falls to a minimum (a fold) before the stable side rises again.
+    # Continued downwards from a stable orbit, the branch must turn round the fold and
+    # come back along the unstable side, not retrace the stable one.
+    sigma = 1.5
+
+    def frequency(v, guess=(11.0, 0.53)):          # (t_i, W) of the closed-form orbit at rebound v
+        def residual(u):
+            x, velocity = _free(u[1], u[0], sigma, v, 2 * math.pi / u[1])
+            return [x - sigma, velocity + v / RESTITUTION]
+        solution = fsolve(residual, guess, xtol=1e-14)
+        assert np.max(np.abs(residual(solution))) < 1e-12
+        return solution
+    fold = minimize_scalar(lambda v: frequency(v)[1], bounds=(-0.3, -0.1), method="bounded",
+                           options={"xatol": 1e-10})
+    expected = fold.fun                                          # the fold's W [rad/s]
+    t_impact, forcing = frequency(-0.6, (9.7, 0.545))            # stable, one impact (grazing from
+    period = 2 * math.pi / forcing                               # inside past v = -0.9)
+    start_state = _free(forcing, t_impact % period, sigma, -0.6, period - t_impact % period)
+    problem = _rigid(forcing, sigma)
+    start = find_orbit(problem, start=list(start_state))
+    assert start.stable and start.impacts_per_period == 1
+    branch = continue_orbits(problem, start, 0.45, step=0.02)
+    folds = [b for b in branch.bifurcations if b.kind == "fold"]
+    assert len(folds) == 1 and abs(folds[0].parameter - expected) < 1e-7, (branch.bifurcations, expected)   # 4e-12
+    parameters = np.array([o.parameter for o in branch.orbits])
+    turn = int(np.argmin(parameters))
+    assert parameters.min() > expected - 1e-9 and 0 < turn < parameters.size - 1
+    assert all(o.stable for o in branch.orbits[:turn]) and not any(o.stable for o in branch.orbits[turn + 1:])
+    assert branch.orbits[-1].parameter > forcing - 1e-9          # back past its start on the unstable side
+    for orbit in branch.orbits[turn + 1::3]:                     # the unstable side is the closed form's
+        v = brentq(lambda v: frequency(v, (11.0, 0.53))[1] - orbit.parameter, fold.x, -0.02, xtol=1e-14)
+        t_impact = frequency(v, (11.0, 0.53))[0] % orbit.period
+        expected_state = _free(orbit.parameter, t_impact, sigma, v, orbit.period - t_impact)
+        np.testing.assert_allclose(orbit.state, expected_state, rtol=0, atol=1e-8)
+        assert orbit.impacts_per_period == 1 and np.max(np.abs(orbit.multipliers)) > 1.0

@@ -42,6 +42,8 @@ from camdyn.errors import ParameterError, SimulationError
 
 #: Smallest arclength step by default (scaled units) [-].
 MIN_STEP = 1e-6
+#: Below this |det([J; t])| (scaled units) the tangent is oriented along the previous one.
+ORIENTATION_FLOOR = 1e-12
 
 __all__ = ["Bifurcation", "Branch", "continue_orbits", "continuation_scales", "KINDS"]
 
@@ -108,6 +110,7 @@ class _Continuation:
         self.tolerance = tolerance
         self.max_corrections = max_corrections
         self.u = problem.unknowns
+        self.orientation = 0.0      # sign of det([J; t]) along the branch, set at its first point
 
     def unscale(self, z: np.ndarray) -> tuple[np.ndarray, float]:
         u = z * self.scales
@@ -142,7 +145,18 @@ class _Continuation:
         orbit = make_orbit(self.problem, x, value, self.periods, run, iterations,
                            float(np.linalg.norm(residual * self.scales[:-1])))
         vector = np.linalg.svd(jac)[2][-1]                               # the null vector
-        return _Point(z, vector if vector @ previous >= 0 else -vector, orbit, iterations, jac)
+        return _Point(z, self.orient(jac, vector, previous), orbit, iterations, jac)
+
+    def orient(self, jac: np.ndarray, vector: np.ndarray, previous: np.ndarray) -> np.ndarray:
+        """The null vector ``vector`` of ``jac`` signed so that ``det([jac; t])`` keeps the
+        sign it had at the branch's first point (Allgower & Georg 2003, sec. 2.1: the sign
+        is constant along a branch through regular points and folds, smooth or not, since
+        it equals that of ``det(M - I) t_lambda``); along ``previous`` at the first point,
+        or where the determinant is too small to tell."""
+        determinant = float(np.linalg.det(np.vstack([jac, vector])))
+        if self.orientation == 0.0 or abs(determinant) < ORIENTATION_FLOOR:
+            return vector if vector @ previous >= 0 else -vector
+        return vector if determinant * self.orientation > 0 else -vector
 
     def correct(self, guess: np.ndarray, direction: np.ndarray, anchor: np.ndarray, arclength: float,
                 jac: np.ndarray) -> _Point:
@@ -345,6 +359,7 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
     seed = np.zeros(z0.size)
     seed[-1] = direction
     point = job.point(z0, seed, start.iterations)
+    job.orientation = math.copysign(1.0, float(np.linalg.det(np.vstack([point.jacobian, point.tangent]))))
     point.orbit = start
     branch = Branch([start], [], "")
     if progress:
@@ -363,7 +378,6 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
                 axis[-1] = 1.0
                 new = job.correct(point.z + ds * point.tangent, axis, np.zeros(point.z.size), edge / scales[-1],
                                   point.jacobian)
-                new.tangent = new.tangent if new.tangent @ point.tangent >= 0 else -new.tangent
             else:
                 new = job.correct(point.z + ds * point.tangent, point.tangent, point.z, ds, point.jacobian)
         except (SimulationError, ParameterError):
