@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import List, Optional
 
+import numpy as np
 import typer
 
 from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, load_source, notice_if_uncached
@@ -50,6 +51,11 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
                        restart: bool = typer.Option(False, "--restart", help="Discard checkpoints instead of "
                                                                              "resuming."),
                        force: bool = ForceOption,
+                       curve: Optional[List[str]] = typer.Option(
+                           None, "--curve", help="A bifurcation followed over --x by two-parameter continuation "
+                                                 "and drawn on the map: KIND=VALUE, KIND fold, period-doubling, "
+                                                 "grazing or contact-loss, VALUE its --y value at the first --x "
+                                                 "value (e.g. period-doubling=16Hz). Repeatable."),
                        quiet: bool = typer.Option(False, "--quiet", help="No progress bar.")):
     """Regime map over two parameters: every point simulated (contact kept, vr reversal, k
     impacts per revolution, irregular), beside the inverse-kinematics prediction."""
@@ -69,11 +75,22 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
              "output": {"path": str(out)}}
     spec = spec_from_dict(table, name=out.stem)
     from camdyn.sweeps.execution import check_dask_address
+    from camdyn.sweeps.regime_map import map_curves, parse_curve
+
+    requests = [parse_curve(text, spec) for text in curve or []]
 
     check_dask_address(dask)   # before the compile notice: bad input is refused before any work
     notice_if_uncached(sweeps=True)
     ds = regime_map(spec, workers=workers, dask=dask, progress=not quiet, restart=restart,
                     echo=lambda msg: console.print(msg, markup=False, highlight=False, soft_wrap=True))
+    for kind, guess in requests:
+        console.print(f"following the {kind} from {spec.vary[1].key} = {guess:.6g} {spec.vary[1].unit} over "
+                      f"{spec.vary[0].key} ...", highlight=False, soft_wrap=True)
+    if requests:
+        ds = map_curves(spec, ds, requests)
+        for name in (v for v in ds.data_vars if "curve_kind" in ds[v].attrs):
+            console.print(f"{ds[name].attrs['curve_kind']}: {int(np.isfinite(ds[name].values).sum())} points; "
+                          f"{ds[name].attrs['stopped']}", highlight=False, soft_wrap=True)
     announce(out)
     announce(plot_regime_map(ds, plot or out.with_suffix(".png")))
     a = {k[len("agreement_"):]: ds.attrs[k] for k in ds.attrs if k.startswith("agreement_")}

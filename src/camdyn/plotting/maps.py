@@ -180,6 +180,14 @@ def plot_regime_map(ds: xr.Dataset, path: str | Path) -> Path:
         if c in present:
             ax.plot([], [], "s", color=colours[c + 1], label=label, markersize=8)
     _kinematic_lines(ax, ds, dims, x, y, (fx, fy))
+    if "period" in ds and min(codes.shape) > 1:               # the simulation's period-1 / period-k boundary
+        multiple = ((ds["period"].values > 1) & (ds["regime"].values == 2)).astype(float)
+        if 0 < multiple.sum() < multiple.size:
+            ax.contour(x, y, multiple.T, levels=[0.5], colors="#7f7f7f", linestyles=":", linewidths=1.5)
+            ax.plot([], [], ":", color="#7f7f7f", label="Poincare period > 1\n(simulation)")
+    for name in (v for v in ds.data_vars if "curve_kind" in ds[v].attrs and ds[v].dims == (dims[0],)):
+        ax.plot(x, ds[name].values * fy, "o-", color="#e377c2", lw=1.8, ms=4,
+                label=f"{ds[name].attrs['curve_kind']}\n(continuation)")
     agree = {k[len("agreement_"):]: ds.attrs[k] for k in ds.attrs if k.startswith("agreement_")}
     if agree:
         ax.set_title(f"simulation agrees with inverse kinematics at {agree['kept_agree']}/{agree['kept']} "

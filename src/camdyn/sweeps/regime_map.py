@@ -23,7 +23,7 @@ from camdyn.io.atomic import atomic_output
 from camdyn.sweeps.spec import SweepSpec
 
 __all__ = ["KINEMATIC_REGIMES", "kinematic_regimes", "loss_of_contact_curve", "boundary_agreement",
-           "regime_map"]
+           "regime_map", "parse_curve", "map_curves"]
 
 #: inverse-kinematics regime codes
 KINEMATIC_REGIMES = {0: "contact kept", 1: "contact kept, vr reversal", 2: "contact lost", -1: "failed"}
@@ -103,6 +103,47 @@ def regime_map(spec: SweepSpec, **run) -> xr.Dataset:
     if curve is not None:
         ds["loss_of_contact_speed"] = curve
     ds.attrs.update({f"agreement_{k}": v for k, v in boundary_agreement(ds).items()})
+    with atomic_output(spec.output, int(ds.nbytes)) as tmp:
+        ds.to_netcdf(tmp, engine="h5netcdf")
+    return ds
+
+
+def parse_curve(text: str, spec: SweepSpec) -> tuple[str, float]:
+    """``KIND=GUESS`` of ``camdyn map --curve`` -> (kind, guess in the second axis's SI
+    unit). The curve's parameter is the map's second axis, traced over its first;
+    ``GUESS`` is where the bifurcation lies at the first axis's first value."""
+    from camdyn.continuation.curves import CURVE_KINDS
+    from camdyn.params.config import convert_value
+    kind, sep, guess = text.partition("=")
+    kind = kind.strip()
+    if not sep or kind not in CURVE_KINDS or not guess.strip():
+        raise CamdynError(f"--curve: expected KIND=VALUE with KIND one of {', '.join(CURVE_KINDS)}, got {text!r}")
+    if len(spec.dimensions) != 2:
+        raise CamdynError("--curve needs a map over two parameters")
+    key = spec.vary[1].key
+    return kind, float(convert_value(key, guess.strip(), {}))
+
+
+def map_curves(spec: SweepSpec, ds: xr.Dataset, requests: list[tuple[str, float]], progress=None) -> xr.Dataset:
+    """Follow each ``(kind, guess)`` of ``requests`` (:func:`parse_curve`) by two-parameter
+    continuation (:func:`camdyn.continuation.curves.system_curve`) over the map's first
+    axis, the bifurcation's parameter being the second axis (searched within two grid
+    spacings of each prediction); add each as ``<kind>_curve`` along the first axis (NaN
+    where the curve ended early, the reason in its ``stopped`` attribute) and rewrite the
+    result file."""
+    from camdyn.continuation.curves import system_curve
+    first, second = spec.vary[0], spec.vary[1]
+    grid = np.asarray(second.values, dtype=float)
+    window = 2.0 * float(np.min(np.abs(np.diff(grid)))) if grid.size > 1 else 0.1 * abs(float(grid[0]))
+    for kind, guess in requests:
+        curve = system_curve(spec.base_system(), kind, second.key, first.key, first.values, guess, window,
+                             progress=progress)
+        values = np.full(len(first.values), np.nan)
+        values[:len(curve.points)] = curve.parameters
+        ds[f"{kind.replace('-', '_')}_curve"] = xr.DataArray(
+            values, dims=[first.dimension],
+            attrs={"long_name": f"{kind} by two-parameter continuation", "units": second.unit,
+                   "curve_kind": kind, "stopped": curve.stopped})
     with atomic_output(spec.output, int(ds.nbytes)) as tmp:
         ds.to_netcdf(tmp, engine="h5netcdf")
     return ds
