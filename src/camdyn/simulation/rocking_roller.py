@@ -48,9 +48,11 @@ from camdyn.errors import ParameterError
 from camdyn.model import lift_laws
 from camdyn.model.profiles import ROW, TWO_PI, Profile
 from camdyn.model.rocking_roller import RockingGeometry, contact_configuration
-from camdyn.simulation.translating import TranslatingFollower, simulate_translating
+from camdyn.params.rocking import RockingSpec
+from camdyn.simulation.translating import TranslatingFollower, follower_from_spec, simulate_translating
 
-__all__ = ["RockingFollower", "RockingTable", "rocking_table", "simulate_rocking", "rocking_liftoff_speed"]
+__all__ = ["RockingFollower", "RockingTable", "rocking_table", "simulate_rocking", "rocking_liftoff_speed",
+           "rocking_from_spec"]
 
 #: Samples of the contact angle over one revolution in the lift table.
 SAMPLES = 8192
@@ -108,6 +110,31 @@ class RockingFollower:
             raise ParameterError(f"restitution must be between 0 and 1, got {self.restitution!r}")
         if isinstance(self.samples, bool) or not isinstance(self.samples, (int, np.integer)) or self.samples < 256:
             raise ParameterError(f"samples must be a whole number of at least 256, got {self.samples!r}")
+
+
+def rocking_from_spec(spec, lift=None):
+    """The :class:`RockingFollower` of a configuration.
+
+    Parameters
+    ----------
+    spec : RockingSpec
+        The configuration in SI units (:func:`camdyn.params.rocking.read_rocking`).
+    lift : array_like, optional
+        The lift samples [m] of a tabulated profile (read from its CSV file).
+
+    Returns
+    -------
+    RockingFollower
+        Its geometry checked (a ``GeometryError`` for a cam the arm cannot follow).
+    """
+    if not isinstance(spec, RockingSpec):
+        raise ParameterError(f"expected a RockingSpec, got {type(spec).__name__}")
+    profile = follower_from_spec(spec.profile, lift).profile
+    geometry = RockingGeometry(profile, spec.pivot_x, spec.pivot_y, spec.arm_length, spec.roller_radius,
+                               spec.lift_direction)
+    return RockingFollower(geometry, spec.inertia, spec.stiffness, spec.preload, damping=spec.damping,
+                           restitution=spec.restitution, capture_velocity=spec.capture_velocity,
+                           citation=spec.citation)
 
 
 @dataclass(frozen=True)
