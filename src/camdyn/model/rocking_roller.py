@@ -202,12 +202,11 @@ def _check_pitch_curve(geometry):
     """Refuse a pitch curve that is not convex (cusps or a concave flank the roller could
     not follow as this model does) and a pivot inside the circle the pitch curve sweeps."""
     profile = geometry.profile
+    angles = np.linspace(0.0, profiles.TWO_PI, 7200, endpoint=False)
     if profile.follower == "flat":
-        s = lift_values(profile.table, np.linspace(0.0, profiles.TWO_PI, 7200, endpoint=False))
+        s = lift_values(profile.table, angles)
         rho = profile.base_radius + s[:, 0] + s[:, 2] + geometry.roller_radius   # (K1)
-        angles = np.linspace(0.0, profiles.TWO_PI, 7200, endpoint=False)
     else:
-        angles = np.linspace(0.0, profiles.TWO_PI, 7200, endpoint=False)
         rho = profiles.pitch_curvature_radius(profile, angles)
     if np.min(rho) <= 0.0:
         worst = int(np.argmin(rho))
@@ -388,7 +387,7 @@ def contact_configuration(geometry, theta, reference=None):
     lo, hi = _brackets(geometry, theta)
     roots = np.stack([_newton(geometry, theta, lo[:, i], hi[:, i]) for i in range(2)], axis=1)
     c, s = np.cos(theta), np.sin(theta)
-    best = None
+    best, found = None, np.zeros(theta.size, dtype=int)
     for i in range(2):
         u = roots[:, i]
         point, tangent = pitch_points(geometry, u)
@@ -399,11 +398,16 @@ def contact_configuration(geometry, theta, reference=None):
         motion = geometry.lift_direction * np.array([-np.sin(psi), np.cos(psi)])
         cosine = motion[0] * outward[0] + motion[1] * outward[1]
         chosen = cosine > 0.0
+        found += chosen
         if best is None:
             best = [u, centre, outward, psi, motion, cosine]
         else:
             for j, value in enumerate((u, centre, outward, psi, motion, cosine)):
                 best[j] = np.where(chosen, value, best[j])
+    if np.any(found != 1):   # a convex pitch curve is entered at one crossing and left at the other
+        bad = int(np.argmax(found != 1))
+        raise GeometryError(f"at cam angle {math.degrees(theta[bad]):.3f} deg the arm meets the pitch curve at "
+                            f"{int(found[bad])} points where the cam lifts it, not one")
     u, centre, outward, psi, motion, cosine = best
     phi = np.arctan2(motion[0] * outward[1] - motion[1] * outward[0], cosine)   # (K4)
     if np.any(np.abs(phi) > MAX_PRESSURE_ANGLE):
