@@ -6,6 +6,7 @@ import contextlib
 import io
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,7 +19,7 @@ from camdyn.model.profiles import rise_return_profile
 from camdyn.model.rocking_roller import RockingGeometry
 from camdyn.simulation.rocking_roller import RockingFollower, simulate_rocking
 
-EXAMPLE = "examples/profiles/rocking_roller.toml"
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "profiles" / "rocking_roller.toml"
 
 
 def run(*argv):
