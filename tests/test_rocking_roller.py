@@ -366,3 +366,9 @@ def test_bad_runs_are_refused():
         simulate_rocking(follower, -1.0, 0.1)
     with pytest.raises(ParameterError, match="RockingFollower"):
         simulate_rocking(circle_geometry(), 10.0, 0.1)
+    built = rocking_table.cache_info().misses
+    for kwargs in ({"speed": math.nan, "duration": 0.1}, {"speed": 10.0, "duration": -1.0},
+                   {"speed": 10.0, "duration": 0.1, "initial_state": (0.1, 0.0, 0.0)}):
+        with pytest.raises(ParameterError):
+            simulate_rocking(RockingFollower(circle_geometry(), INERTIA, STIFFNESS, PRELOAD, samples=999), **kwargs)
+    assert rocking_table.cache_info().misses == built   # refused before any table was built

@@ -49,6 +49,7 @@ from camdyn.model import lift_laws
 from camdyn.model.profiles import ROW, TWO_PI, Profile
 from camdyn.model.rocking_roller import RockingGeometry, contact_configuration
 from camdyn.params.rocking import RockingSpec
+from camdyn.simulation import limits
 from camdyn.simulation.translating import TranslatingFollower, follower_from_spec, simulate_translating
 
 __all__ = ["RockingFollower", "RockingTable", "rocking_table", "simulate_rocking", "rocking_liftoff_speed",
@@ -262,6 +263,13 @@ def simulate_rocking(follower, speed, duration, sample_rate=10e3, phase=0.0, ini
     """
     if not isinstance(follower, RockingFollower):
         raise ParameterError(f"expected a RockingFollower, got {type(follower).__name__}")
+    for name, value, unit in (("speed", speed, "rad/s"), ("duration", duration, "s"),
+                              ("sample_rate", sample_rate, "Hz")):   # before the table is built
+        if not (math.isfinite(limits.check_number(name, value, unit)) and value > 0.0):
+            raise ParameterError(f"{name} must be positive and finite, got {value!r} {unit}")
+    if initial_state is not None and np.shape(initial_state) != (2,):
+        raise ParameterError(f"initial_state must be two finite numbers (psi [rad], psi_dot [rad/s]), "
+                             f"got {initial_state!r}")
     geometry = follower.geometry
     table = rocking_table(geometry, follower.samples)
     sigma = geometry.lift_direction
