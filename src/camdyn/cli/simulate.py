@@ -159,16 +159,22 @@ def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     """Simulate the follower and summarise the response.
 
     A configuration whose [follower] says kind = "translating" (or the preset alzate) is a
-    translating follower on a cam profile (docs/profiles.md)."""
+    translating follower on a cam profile, kind = "rocking" a rocking roller or knife edge
+    on one (docs/profiles.md)."""
     from camdyn.simulation.runner import simulate as run
     check_outputs(netcdf=out, figure=plot, force=force)
     if is_translating(source):
         from camdyn.cli.translating import simulate_translating_command
         simulate_translating_command(source, set_, speed, revolutions, sample_rate, out, plot, method, rtol, json_out)
         return
+    if declared_kind(source) == "rocking":
+        from camdyn.cli.rocking import simulate_rocking_command
+        simulate_rocking_command(source, set_, speed, revolutions, sample_rate, out, plot, method, rtol, json_out)
+        return
     if declared_kind(source) is not None:
         raise ParameterError(f"{source}: follower.kind is {declared_kind(source)!r}; write 'translating' for a "
-                             "translating follower, or leave it out for the rocking one")
+                             "translating follower, 'rocking' for a rocking roller or knife edge, or leave it "
+                             "out for the rocking flat-faced one")
     rtol = 1e-8 if rtol is None else rtol
     system = load_source(source, set_)
     fs = parse_quantity(sample_rate, "Hz", "--sample-rate")

@@ -1,0 +1,105 @@
+"""``camdyn simulate`` for a rocking roller or knife-edge follower on a cam profile: the
+configuration's ``[follower] kind = "rocking"`` sends the command here."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+from rich.table import Table
+
+from camdyn.cli.common import console
+from camdyn.cli.outputs import announce, emit_json
+from camdyn.errors import ParameterError
+from camdyn.params.config import parse_assignments
+from camdyn.params.units import parse_quantity, parse_speed
+
+__all__ = ["simulate_rocking_command", "rocking_summary"]
+
+#: The tolerance of a rocking follower's run when --rtol is not given [-].
+DEFAULT_RTOL = 1e-10
+
+
+def rocking_summary(ds, follower, name: str) -> dict:
+    """The headline numbers of a rocking follower's run (schema
+    ``camdyn.simulate-rocking/1``)."""
+    from camdyn.simulation.rocking_roller import rocking_liftoff_speed
+
+    speed = float(ds.attrs["speed_rad_s"])
+    revolutions = float(ds["time"][-1] - ds["time"][0]) * speed / (2.0 * math.pi)
+    kinds = ds["event_kind"].values
+    count = {kind: int(np.count_nonzero(kinds == kind)) for kind in ("impact", "separation", "capture")}
+    liftoff = rocking_liftoff_speed(follower)
+    return {
+        "preset": name,
+        "speed_rpm": 60.0 * speed / (2.0 * math.pi),
+        "revolutions": revolutions,
+        "impacts": count["impact"],
+        "impacts_per_revolution": count["impact"] / revolutions if revolutions else 0.0,
+        "separations": count["separation"],
+        "captures": count["capture"],
+        "contact_force_max_N": float(ds["contact_force"].max()),
+        "gap_max_rad": float(ds["gap"].max()),
+        "pressure_angle_max_deg": float(np.degrees(np.abs(ds["pressure_angle"]).max())),
+        "contact_fraction": float(ds["in_contact"].mean()),
+        "liftoff_speed_rpm": 60.0 * liftoff / (2.0 * math.pi) if math.isfinite(liftoff) else None,
+        "elapsed_s": float(ds.attrs["elapsed_s"]),
+        "solver": {k[7:]: v for k, v in ds.attrs.items() if k.startswith("solver_")},
+    }
+
+
+def _print(out: dict) -> None:
+    table = Table("quantity", "value", title=f"simulation of {out['preset']} (rocking follower)")
+    table.add_row("cam speed", f"{out['speed_rpm']:.5g} rpm")
+    table.add_row("revolutions", f"{out['revolutions']:.4g}")
+    table.add_row("impacts", f"{out['impacts']} ({out['impacts_per_revolution']:.3g} per revolution)")
+    table.add_row("lift-off events (separations)", f"{out['separations']}")
+    table.add_row("captures into sustained contact", f"{out['captures']}")
+    table.add_row("max contact force", f"{out['contact_force_max_N']:.5g} N")
+    table.add_row("max gap (arm angle)", f"{math.degrees(out['gap_max_rad']):.4g} deg")
+    table.add_row("max pressure angle", f"{out['pressure_angle_max_deg']:.4g} deg")
+    table.add_row("time in contact", f"{100 * out['contact_fraction']:.1f} %")
+    liftoff = out["liftoff_speed_rpm"]
+    table.add_row("lift-off speed of the cam", "never" if liftoff is None else f"{liftoff:.5g} rpm")
+    s = out["solver"]
+    table.add_row("solver", f"{s['accepted_steps']} steps ({s['rejected_steps']} rejected), {s['events']} events, "
+                            f"{out['elapsed_s'] * 1e3:.1f} ms")
+    console.print(table)
+
+
+def simulate_rocking_command(source: str, assignments, speed: str | None, revolutions: float, sample_rate: str,
+                             out: Path | None, plot: Path | None, method: str, rtol: float | None,
+                             json_out: bool) -> None:
+    """Run ``camdyn simulate`` on a rocking roller or knife-edge follower (the outputs are
+    checked already)."""
+    from camdyn.io.rocking_config import load_rocking
+    from camdyn.simulation.rocking_roller import simulate_rocking
+
+    if method != "auto":
+        raise ParameterError(f"--method {method}: the rocking roller is integrated with the automatic method only "
+                             "(leave --method out)")
+    if plot is not None:
+        raise ParameterError("--plot is not offered for a rocking roller or knife-edge follower yet; write the "
+                             "results with --out")
+    follower, spec = load_rocking(source, parse_assignments(assignments))
+    omega = 2.0 * math.pi * parse_speed(speed, "--speed") if speed is not None else spec.profile.speed
+    if omega is None:
+        raise ParameterError(f"{spec.name} gives no cam speed: add motion.speed to the file or pass --speed")
+    if not (isinstance(revolutions, (int, float)) and math.isfinite(revolutions) and revolutions > 0):
+        raise ParameterError(f"--revolutions must be positive, got {revolutions!r}")
+    fs = parse_quantity(sample_rate, "Hz", "--sample-rate")
+    ds = simulate_rocking(follower, omega, revolutions * 2.0 * math.pi / omega, sample_rate=fs,
+                          phase=spec.profile.phase, rtol=DEFAULT_RTOL if rtol is None else rtol)
+    ds.attrs["name"] = spec.name
+    summary = rocking_summary(ds, follower, spec.name)
+    if not json_out:
+        _print(summary)
+    files = []
+    if out is not None:
+        from camdyn.io.netcdf import save_netcdf
+        save_netcdf(ds, out)
+        files.append(announce(out, json_out))
+    if json_out:
+        emit_json("simulate-rocking", {k: v for k, v in summary.items() if k != "solver"},
+                  solver=summary["solver"], files=files)

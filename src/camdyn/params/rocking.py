@@ -1,0 +1,229 @@
+"""Configuration files of a rocking roller or knife-edge follower on a cam profile: TOML
+with units, ``[follower] kind = "rocking"``::
+
+    [follower]
+    kind = "rocking"
+    face = "roller"
+    roller_radius = "8 mm"
+    pivot_x = "-70 mm"
+    pivot_y = "40 mm"
+    arm_length = "70 mm"
+    lift_direction = "counter-clockwise"
+    inertia = "2e-4 kg*m^2"
+
+    [spring]
+    stiffness = "0.5 N*m/rad"
+    preload = "0.05 N*m"
+
+    [profile]
+    kind = "rise-return"
+    face = "flat"
+    base_radius = "30 mm"
+    segments = [...]
+
+    [motion]
+    speed = "500 rpm"
+
+The arm's keys are declared in :data:`SCHEMA`; the ``[profile]`` table takes the keys of
+a translating follower's profile (:data:`camdyn.params.profiles.SCHEMA`) and, besides,
+``profile.face`` (the follower the profile was made for, ``"flat"`` by default) and
+``profile.offset`` (that follower's offset). The profile and the motion are read by the
+translating follower's reader, so that they are checked key by key as there;
+:func:`read_rocking` returns a :class:`RockingSpec` of SI values, and
+:func:`camdyn.simulation.rocking_roller.rocking_from_spec` builds the follower.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyError
+from camdyn.params.profiles import TranslatingSpec, spec_from_table
+from camdyn.params.units import parse_quantity
+
+__all__ = ["ROCKING", "SCHEMA", "LIFT_DIRECTIONS", "RockingSpec", "read_rocking", "rocking_spec_from_table"]
+
+#: The follower kind that selects this schema in ``[follower] kind``.
+ROCKING = "rocking"
+LIFT_DIRECTIONS = {"counter-clockwise": 1, "clockwise": -1}
+_REQUIRED = object()
+#: Dotted key -> (unit of the stored SI value, or "str"; default; meaning).
+SCHEMA: dict[str, tuple[str, object, str]] = {
+    "follower.kind": ("str", _REQUIRED, "'rocking' for this schema"),
+    "follower.face": ("str", _REQUIRED, "'roller' or 'knife' (knife edge)"),
+    "follower.roller_radius": ("m", 0.0, "roller radius r_r (roller face only)"),
+    "follower.pivot_x": ("m", _REQUIRED, "the arm's pivot, x from the cam's axis"),
+    "follower.pivot_y": ("m", _REQUIRED, "the arm's pivot, y from the cam's axis"),
+    "follower.arm_length": ("m", _REQUIRED, "pivot to roller centre (or knife tip) L"),
+    "follower.lift_direction": ("str", "counter-clockwise", "the sense in which the cam lifts the arm: "
+                                                            "'counter-clockwise' or 'clockwise'"),
+    "follower.inertia": ("kg*m**2", _REQUIRED, "moment of inertia I of the arm about its pivot"),
+    "follower.damping": ("N*m*s", 0.0, "viscous damping c_t on the arm [N m s/rad]"),
+    "spring.stiffness": ("N*m", _REQUIRED, "torsional spring stiffness k_t [N m/rad]"),
+    "spring.preload": ("N*m", _REQUIRED, "spring moment M0 with the arm on the cam's lowest point"),
+    "contact.restitution": ("", 0.8, "Newton's coefficient of restitution e of the normal velocity"),
+    "contact.capture_velocity": ("1/s", 1e-6, "impacts slower than this [rad/s] end in sustained contact"),
+}
+#: Keys passed to the translating follower's reader as they are.
+_PASSED = ("profile.", "motion.")
+_META_KEYS = ("preset.name", "preset.citation", "preset.description")
+
+
+@dataclass(frozen=True)
+class RockingSpec:
+    """A rocking follower's configuration in SI units, checked key by key.
+
+    Attributes
+    ----------
+    name, citation : str
+        The configuration's name and the source of its values.
+    face : str
+        ``"roller"`` or ``"knife"``.
+    roller_radius, pivot_x, pivot_y, arm_length : float
+        r_r, the pivot's position and L [m].
+    lift_direction : int
+        +1 counter-clockwise, -1 clockwise.
+    inertia, damping, stiffness, preload : float
+        I [kg m^2], c_t [N m s/rad], k_t [N m/rad], M0 [N m].
+    restitution, capture_velocity : float
+        e [-] and [rad/s].
+    profile : TranslatingSpec
+        The profile and the motion, as the translating follower's reader gives them
+        (its follower's mass, spring and contact are placeholders).
+    """
+
+    name: str
+    citation: str
+    face: str
+    roller_radius: float
+    pivot_x: float
+    pivot_y: float
+    arm_length: float
+    lift_direction: int
+    inertia: float
+    damping: float
+    stiffness: float
+    preload: float
+    restitution: float
+    capture_velocity: float
+    profile: TranslatingSpec
+
+
+def _value(key: str, raw, unit: str):
+    if unit == "str":
+        if not isinstance(raw, str) or not raw.strip():
+            raise ParameterError(f"{key}: expected text, got {raw!r}")
+        return raw.strip()
+    if isinstance(raw, bool):
+        raise ParameterError(f"{key}: expected a number, got {raw!r}")
+    if isinstance(raw, (int, float)):
+        if unit and float(raw) != 0.0:
+            raise UnitError(f"{key}: {raw!r} has no unit; write it as text with one, e.g. \"{raw} {unit}\"")
+        value = float(raw)
+    elif isinstance(raw, str):
+        value = parse_quantity(raw, unit, key)
+    else:
+        raise ParameterError(f"{key}: cannot read {raw!r}")
+    if not math.isfinite(value):
+        raise ParameterError(f"{key} must be finite, got {raw!r}")
+    return value
+
+
+def _profile_spec(flat: dict, face: str, roller_radius: float, name: str, folder: Path | None) -> TranslatingSpec:
+    """The profile and motion through the translating follower's reader: its follower is
+    the one the profile was made for, its dynamics placeholders."""
+    made_for = str(flat.get("profile.face", "flat"))
+    table = {key: value for key, value in flat.items() if key.startswith(_PASSED)
+             and key not in ("profile.face", "profile.offset")}
+    table.update({"follower.kind": "translating", "follower.face": made_for, "follower.mass": "1 kg",
+                  "spring.stiffness": "0 N/m", "spring.preload": "0 N"})
+    if "profile.offset" in flat:
+        table["follower.offset"] = flat["profile.offset"]
+    if made_for == "roller":
+        table["follower.roller_radius"] = f"{roller_radius} m"
+    if made_for != "flat" and made_for != face:
+        raise ParameterError(f"profile.face {made_for!r}: a profile made for a knife edge or a roller is that "
+                             f"follower's pitch curve; it takes a rocking {made_for} only, not a {face} (a profile "
+                             "made for a flat face takes either)")
+    return spec_from_table(table, name=name, folder=folder)
+
+
+def rocking_spec_from_table(flat: dict, name: str = "custom", citation: str = "", folder: Path | None = None
+                            ) -> RockingSpec:
+    """A :class:`RockingSpec` from flattened TOML (dotted keys -> raw values); ``folder``
+    is where a tabulated profile's relative file is read from."""
+    flat = {k: v for k, v in flat.items() if k not in _META_KEYS}
+    for key in flat:
+        if key not in SCHEMA and not key.startswith(_PASSED):
+            close = difflib.get_close_matches(key, list(SCHEMA), n=3)
+            hint = f"; did you mean {', '.join(close)}?" if close else f"; known keys: {', '.join(SCHEMA)}"
+            raise UnknownKeyError(f"unknown key {key!r} in a rocking-follower configuration{hint}")
+    if flat.get("follower.kind") != ROCKING:
+        raise ParameterError(f"follower.kind is {flat.get('follower.kind')!r}; this reader takes 'rocking'")
+    v = {}
+    for key, (unit, default, meaning) in SCHEMA.items():
+        if key in flat:
+            v[key] = _value(key, flat[key], unit)
+        elif default is _REQUIRED:
+            raise ParameterError(f"missing key {key!r} ({meaning})")
+        else:
+            v[key] = default
+    face = v["follower.face"]
+    if face not in ("roller", "knife"):
+        raise ParameterError(f"follower.face must be 'roller' or 'knife' for a rocking arm, got {face!r}")
+    if (face == "roller") != (v["follower.roller_radius"] > 0.0):
+        raise ParameterError(f"follower.roller_radius: a roller needs a positive radius and a knife edge none, "
+                             f"got {v['follower.roller_radius']!r} m for a {face}")
+    if v["follower.lift_direction"] not in LIFT_DIRECTIONS:
+        raise ParameterError(f"follower.lift_direction must be one of {', '.join(LIFT_DIRECTIONS)}, "
+                             f"got {v['follower.lift_direction']!r}")
+    profile = _profile_spec(flat, face, v["follower.roller_radius"], name, folder)
+    return RockingSpec(
+        name=name, citation=citation, face=face, roller_radius=v["follower.roller_radius"],
+        pivot_x=v["follower.pivot_x"], pivot_y=v["follower.pivot_y"], arm_length=v["follower.arm_length"],
+        lift_direction=LIFT_DIRECTIONS[v["follower.lift_direction"]], inertia=v["follower.inertia"],
+        damping=v["follower.damping"], stiffness=v["spring.stiffness"], preload=v["spring.preload"],
+        restitution=v["contact.restitution"], capture_velocity=v["contact.capture_velocity"], profile=profile)
+
+
+def _flatten(table: dict, prefix: str = "") -> dict:
+    out = {}
+    for key, value in table.items():
+        if isinstance(value, dict):
+            out.update(_flatten(value, f"{prefix}{key}."))
+        else:
+            out[f"{prefix}{key}"] = value
+    return out
+
+
+def read_rocking(source: str | Path, overrides: dict | None = None) -> RockingSpec:
+    """Read a rocking-follower TOML file, with dotted-key overrides.
+
+    Parameters
+    ----------
+    source : str or Path
+        The TOML file.
+    overrides : dict, optional
+        Dotted key -> value as text with its unit (``{"spring.preload": "0.06 N*m"}``).
+
+    Returns
+    -------
+    RockingSpec
+    """
+    path = Path(str(source))
+    try:
+        table = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise PresetError(f"{source}: cannot be read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise PresetError(f"{source}: not UTF-8 text; a configuration file is TOML, saved as UTF-8") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise PresetError(f"{source}: not valid TOML ({exc})") from None
+    flat = _flatten(table)
+    flat.update(overrides or {})
+    return rocking_spec_from_table(flat, name=str(flat.get("preset.name", path.stem)),
+                                   citation=str(flat.get("preset.citation", "")), folder=path.resolve().parent)

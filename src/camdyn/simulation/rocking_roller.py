@@ -1,0 +1,339 @@
+"""Simulation of a rocking arm with a roller or a knife edge on a cam of any profile: the
+arm's dynamics in its angle, run through the translating follower's compiled model
+(system 4) with the arm's contact angle as its lift.
+
+**The model.** The arm (moment of inertia ``I`` [kg m^2] about its pivot) turns by the
+lift angle ``x = sigma (psi - psi_0)`` [rad], measured in its lift sense ``sigma`` from
+the arm angle ``psi_0`` at which it rests on the cam's lowest point; a torsional spring
+(stiffness ``k_t`` [N m/rad], preload moment ``M_0`` [N m] at ``x = 0``) and a viscous
+damper ``c_t`` [N m s/rad] hold it against the cam. In flight
+
+    I x'' = -M_0 - k_t x - c_t x'                                                  (A1)
+
+and the cam (turning at ``omega``, ``theta = theta_0 + omega t``) keeps ``x >= s(theta)
+= sigma (psi_c(theta) - psi_0)`` with ``psi_c`` of :mod:`camdyn.model.rocking_roller`.
+This is eq. (1) of :mod:`camdyn.model.translating_follower` with ``m -> I``, ``k -> k_t``,
+``F0 -> M_0``, ``c -> c_t``, lengths -> angles.
+
+**Impacts.** The normal gap rate at the roller is ``v_n = L cos(phi) (x' - omega s')``
+[m/s] (the roller centre moves at ``L psi'`` along ``e'(psi)``, and ``omega s'`` is the
+rate at which the contact angle moves), so Newton's law ``v_n+ = -e v_n-`` at an instant
+where ``L cos(phi)`` is fixed is
+
+    x'+ - omega s' = -e (x'- - omega s')                                           (A2)
+
+the translating follower's law in angles, exact for this one-degree-of-freedom arm
+(the roller is frictionless and massless: the impulse acts along the normal). In
+sustained contact the cam holds the arm with the moment ``M = I omega^2 s'' + c_t omega
+s' + M_0 + k_t s`` [N m] (eq. 3 there) and the contact force ``F = M / (L cos(phi))``
+[N] along the normal; the arm lifts off where ``M`` falls to zero.
+
+**The lift table.** ``s(theta)`` is sampled exactly at ``n`` equally spaced cam angles
+and interpolated by a periodic cubic spline (SciPy's ``CubicSpline``) in the compiled
+model's table format; its errors are measured by the tests against the exact
+derivatives (see the documentation's section on the rocking roller).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+import xarray as xr
+from scipy.interpolate import CubicSpline
+
+from camdyn.errors import ParameterError
+from camdyn.model import lift_laws
+from camdyn.model.profiles import ROW, TWO_PI, Profile
+from camdyn.model.rocking_roller import RockingGeometry, contact_configuration
+from camdyn.params.rocking import RockingSpec
+from camdyn.simulation import limits
+from camdyn.simulation.translating import TranslatingFollower, follower_from_spec, simulate_translating
+
+__all__ = ["RockingFollower", "RockingTable", "rocking_table", "simulate_rocking", "rocking_liftoff_speed",
+           "rocking_from_spec"]
+
+#: Samples of the contact angle over one revolution in the lift table.
+SAMPLES = 8192
+
+
+@dataclass(frozen=True)
+class RockingFollower:
+    """A spring-loaded rocking arm with a roller or a knife edge, validated when built.
+
+    Attributes
+    ----------
+    geometry : RockingGeometry
+        Cam profile, pivot, arm length, roller radius and lift sense.
+    inertia : float
+        Moment of inertia I of the arm about its pivot [kg m^2].
+    stiffness : float
+        Torsional spring stiffness k_t [N m/rad].
+    preload : float
+        Spring moment M_0 [N m] with the arm on the cam's lowest point.
+    damping : float
+        Viscous damping c_t [N m s/rad].
+    restitution : float
+        Newton's coefficient of restitution e [-] of the normal velocity.
+    capture_velocity : float
+        Impacts slower than this [rad/s] (relative angular velocity) end in sustained
+        contact.
+    samples : int
+        Cam angles of the lift table (at least 256).
+    citation : str
+        Where the numbers come from.
+    """
+
+    geometry: RockingGeometry
+    inertia: float
+    stiffness: float
+    preload: float
+    damping: float = 0.0
+    restitution: float = 0.8
+    capture_velocity: float = 1e-6
+    samples: int = SAMPLES
+    citation: str = field(default="", compare=False)
+
+    def __post_init__(self):
+        if not isinstance(self.geometry, RockingGeometry):
+            raise ParameterError(f"geometry must be a RockingGeometry, got {type(self.geometry).__name__}")
+        for name in ("inertia", "stiffness", "preload", "damping", "restitution", "capture_velocity"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ParameterError(f"{name} must be a finite number, got {value!r}")
+            if value < 0.0:
+                raise ParameterError(f"{name} must not be negative, got {value!r}")
+        if self.inertia <= 0.0:
+            raise ParameterError(f"inertia must be positive, got {self.inertia!r} kg m^2")
+        if self.restitution > 1.0:
+            raise ParameterError(f"restitution must be between 0 and 1, got {self.restitution!r}")
+        if isinstance(self.samples, bool) or not isinstance(self.samples, (int, np.integer)) or self.samples < 256:
+            raise ParameterError(f"samples must be a whole number of at least 256, got {self.samples!r}")
+
+
+def rocking_from_spec(spec, lift=None):
+    """The :class:`RockingFollower` of a configuration.
+
+    Parameters
+    ----------
+    spec : RockingSpec
+        The configuration in SI units (:func:`camdyn.params.rocking.read_rocking`).
+    lift : array_like, optional
+        The lift samples [m] of a tabulated profile (read from its CSV file).
+
+    Returns
+    -------
+    RockingFollower
+        Its geometry checked (a ``GeometryError`` for a cam the arm cannot follow).
+    """
+    if not isinstance(spec, RockingSpec):
+        raise ParameterError(f"expected a RockingSpec, got {type(spec).__name__}")
+    profile = follower_from_spec(spec.profile, lift).profile
+    geometry = RockingGeometry(profile, spec.pivot_x, spec.pivot_y, spec.arm_length, spec.roller_radius,
+                               spec.lift_direction)
+    return RockingFollower(geometry, spec.inertia, spec.stiffness, spec.preload, damping=spec.damping,
+                           restitution=spec.restitution, capture_velocity=spec.capture_velocity,
+                           citation=spec.citation)
+
+
+@dataclass(frozen=True)
+class RockingTable:
+    """The arm's contact angle sampled over one revolution, and its spline table.
+
+    Attributes
+    ----------
+    profile : Profile
+        The lift ``s = sigma (psi_c - psi_0)`` [rad] as a cubic-spline table (its
+        ``base_radius`` and ``follower`` are the cam's, for the record only).
+    rest_angle : float
+        psi_0 [rad]: the arm angle on the cam's lowest point (least ``sigma psi_c``).
+    theta : ndarray
+        The sample angles [rad].
+    lift : ndarray (4, n)
+        The exact ``s`` [rad] and its derivatives in theta at the samples.
+    pressure_angle : ndarray
+        The exact pressure angle [rad] at the samples.
+    """
+
+    profile: Profile
+    rest_angle: float
+    theta: np.ndarray
+    lift: np.ndarray
+    pressure_angle: np.ndarray
+
+
+def _rest_angle(geometry, theta, psi):
+    """psi_0 [rad]: the least ``sigma psi_c`` over the cam angles, refined from the best
+    sample by Newton's method on ``psi_c' = 0`` (the sample itself on a dwell)."""
+    sigma = geometry.lift_direction
+    best = int(np.argmin(sigma * psi[0]))
+    angle, spacing = theta[best], theta[1] - theta[0]
+    for _ in range(30):
+        config = contact_configuration(geometry, [angle], reference=psi[0, best])
+        slope, curvature = config.psi[1, 0], config.psi[2, 0]
+        if curvature == 0.0 or abs(slope) < 1e-15:
+            break
+        angle -= slope / curvature
+        if abs(angle - theta[best]) > spacing:
+            return float(psi[0, best])
+    value = float(contact_configuration(geometry, [angle], reference=psi[0, best]).psi[0, 0])
+    return value if sigma * value <= sigma * psi[0, best] else float(psi[0, best])
+
+
+@lru_cache(maxsize=8)
+def rocking_table(geometry, samples=SAMPLES):
+    """The :class:`RockingTable` of a geometry with ``samples`` cam angles (cached)."""
+    theta = np.linspace(0.0, TWO_PI, samples, endpoint=False)
+    config = contact_configuration(geometry, theta)
+    rest = _rest_angle(geometry, theta, config.psi)
+    sigma = geometry.lift_direction
+    lift = sigma * config.psi.copy()
+    lift[0] -= sigma * rest
+    angles = np.r_[theta, TWO_PI]
+    spline = CubicSpline(angles, np.r_[lift[0], lift[0, 0]], bc_type="periodic")
+    table = np.zeros(1 + ROW * samples)
+    table[0] = samples
+    rows = table[1:].reshape(samples, ROW)
+    rows[:, 0] = lift_laws.CUBIC
+    rows[:, 1] = theta
+    rows[:, 2] = angles[1] - angles[0]
+    rows[:, 3:7] = spline.c[::-1].T       # c0 + c1 t + c2 t^2 + c3 t^3
+    cam = geometry.profile
+    profile = Profile(table, cam.base_radius, cam.follower, cam.roller_radius, cam.offset)
+    return RockingTable(profile, rest, theta, lift, config.pressure_angle)
+
+
+def rocking_liftoff_speed(follower):
+    """The lowest cam speed [rad/s] at which the arm held on the cam would need a pull:
+    the smallest positive root over the table's sample angles of ``I s'' omega^2 + c_t
+    s' omega + M_0 + k_t s = 0`` (the holding moment of the module's docstring), with the
+    exact ``s', s''``; infinite for a cam that never needs a pull."""
+    table = rocking_table(follower.geometry, follower.samples)
+    s, s1, s2 = table.lift[0], table.lift[1], table.lift[2]
+    a = follower.inertia * s2
+    b = follower.damping * s1
+    c = follower.preload + follower.stiffness * s
+    if np.any(c <= 0.0):
+        return 0.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        disc = b * b - 4.0 * a * c
+        roots = np.where(a < 0.0, (-b - np.sqrt(disc)) / (2.0 * a), np.inf)
+        both = (a > 0.0) & (b < 0.0) & (disc >= 0.0)
+        roots = np.where(both, (-b - np.sqrt(disc)) / (2.0 * a), roots)
+        roots = np.where((a == 0.0) & (b < 0.0), -c / b, roots)
+    return float(np.min(roots))
+
+
+def simulate_rocking(follower, speed, duration, sample_rate=10e3, phase=0.0, initial_state=None, rtol=1e-10,
+                     atol=1e-12, max_step=None, max_events=None, max_steps=50_000_000) -> xr.Dataset:
+    """Simulate a rocking roller or knife-edge follower.
+
+    Parameters
+    ----------
+    follower : RockingFollower
+        The arm and its cam.
+    speed : float
+        Cam speed omega [rad/s], counter-clockwise.
+    duration : float
+        Length of the run [s].
+    sample_rate : float
+        Output sampling rate [Hz].
+    phase : float
+        Cam angle theta0 [rad] at t = 0.
+    initial_state : (float, float), optional
+        ``(psi [rad], psi_dot [rad/s])``, the arm angle and its rate; default on the cam,
+        moving with it.
+    rtol, atol : float
+        Local error tolerances, relative [-] and absolute [rad, rad/s].
+    max_step, max_events, max_steps
+        As :func:`camdyn.simulation.translating.simulate_translating`.
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``time``: ``psi`` and ``psi_dot`` (the arm), ``lift_angle`` ``x`` and
+        ``contact_angle`` ``s`` [rad] (from the rest angle, in the lift sense), ``gap``
+        [rad], ``pressure_angle`` [rad], ``contact_moment`` [N m], ``contact_force`` [N],
+        ``in_contact``; over ``event``: ``event_time``, ``event_kind`` (as the
+        translating follower's), ``event_velocity`` [rad/s] and ``event_normal_velocity``
+        [m/s] (relative, before the event). Attributes hold the parameters, the rest
+        angle and the solver counters.
+    """
+    if not isinstance(follower, RockingFollower):
+        raise ParameterError(f"expected a RockingFollower, got {type(follower).__name__}")
+    for name, value, unit in (("speed", speed, "rad/s"), ("duration", duration, "s"),
+                              ("sample_rate", sample_rate, "Hz")):   # before the table is built
+        if not (math.isfinite(limits.check_number(name, value, unit)) and value > 0.0):
+            raise ParameterError(f"{name} must be positive and finite, got {value!r} {unit}")
+    if initial_state is not None and np.shape(initial_state) != (2,):
+        raise ParameterError(f"initial_state must be two finite numbers (psi [rad], psi_dot [rad/s]), "
+                             f"got {initial_state!r}")
+    geometry = follower.geometry
+    table = rocking_table(geometry, follower.samples)
+    sigma = geometry.lift_direction
+    translating = TranslatingFollower(table.profile, mass=follower.inertia, stiffness=follower.stiffness,
+                                      preload=follower.preload, damping=follower.damping,
+                                      restitution=follower.restitution,
+                                      capture_velocity=follower.capture_velocity, citation=follower.citation)
+    state = None
+    if initial_state is not None:
+        y0 = np.asarray(initial_state, dtype=float).reshape(-1)
+        if y0.shape != (2,) or not np.all(np.isfinite(y0)):
+            raise ParameterError(f"initial_state must be two finite numbers (psi [rad], psi_dot [rad/s]), "
+                                 f"got {initial_state!r}")
+        state = (sigma * (y0[0] - table.rest_angle), sigma * y0[1])
+    ds = simulate_translating(translating, speed, duration, sample_rate=sample_rate, phase=phase,
+                              initial_state=state, rtol=rtol, atol=atol, max_step=max_step, max_events=max_events,
+                              max_steps=max_steps)
+    return _dataset(follower, table, ds, speed, phase)
+
+
+def _dataset(follower, table, ds, speed, phase):
+    """The translating run's Dataset in the arm's terms."""
+    geometry = follower.geometry
+    sigma = geometry.lift_direction
+    angles = np.r_[table.theta, TWO_PI]
+    pressure = CubicSpline(angles, np.r_[table.pressure_angle, table.pressure_angle[0]], bc_type="periodic")
+    phi = pressure((phase + speed * ds.time.values) % TWO_PI)
+    arm = geometry.arm_length * np.cos(phi)    # moment arm of the contact force [m]
+    event_arm = geometry.arm_length * np.cos(pressure((phase + speed * ds.event_time.values) % TWO_PI))
+    x, x_dot = ds.x.values, ds.x_dot.values
+    data = {
+        "psi": (("time",), table.rest_angle + sigma * x, {"units": "rad", "long_name": "arm angle"}),
+        "psi_dot": (("time",), sigma * x_dot, {"units": "rad/s", "long_name": "arm angular velocity"}),
+        "lift_angle": (("time",), x, {"units": "rad", "long_name": "arm angle from rest, in the lift sense"}),
+        "lift_rate": (("time",), x_dot, {"units": "rad/s", "long_name": "lift angle rate"}),
+        "contact_angle": (("time",), ds.lift.values, {"units": "rad",
+                                                       "long_name": "lift angle of contact with the cam"}),
+        "gap": (("time",), ds.gap.values, {"units": "rad", "long_name": "angular gap to the cam"}),
+        "pressure_angle": (("time",), phi, {"units": "rad", "long_name": "pressure angle of the contact"}),
+        "contact_moment": (("time",), ds.contact_force.values,
+                           {"units": "N*m", "long_name": "moment of the cam on the arm about the pivot"}),
+        "contact_force": (("time",), ds.contact_force.values / arm,
+                          {"units": "N", "long_name": "normal force of the cam on the roller"}),
+        "in_contact": ds.in_contact,
+        "event_time": ds.event_time,
+        "event_kind": ds.event_kind,
+        "event_velocity": (("event",), ds.event_velocity.values,
+                           {"units": "rad/s", "long_name": "relative angular velocity x_dot - s_dot before the event"}),
+        "event_normal_velocity": (("event",), ds.event_velocity.values * event_arm,
+                                  {"units": "m/s", "long_name": "normal velocity of roller and cam before the event"}),
+    }
+    out = xr.Dataset(data, coords={"time": ds.time})
+    keep = {k: v for k, v in ds.attrs.items() if k.startswith("solver_") or k in (
+        "rtol", "atol", "elapsed_s", "status", "speed_rad_s", "phase_rad", "restitution", "citation")}
+    out.attrs.update(keep)
+    out.attrs.update({
+        "title": "camdyn rocking roller follower" if geometry.roller_radius > 0 else "camdyn rocking knife-edge "
+                                                                                      "follower",
+        "inertia_kg_m2": follower.inertia, "stiffness_N_m_per_rad": follower.stiffness,
+        "preload_N_m": follower.preload, "damping_N_m_s_per_rad": follower.damping,
+        "capture_velocity_rad_per_s": follower.capture_velocity, "pivot_x_m": geometry.pivot_x,
+        "pivot_y_m": geometry.pivot_y, "arm_length_m": geometry.arm_length,
+        "roller_radius_m": geometry.roller_radius, "lift_direction": geometry.lift_direction,
+        "rest_angle_rad": table.rest_angle, "table_samples": follower.samples,
+        "cam_follower_of_profile": geometry.profile.follower, "base_radius_m": geometry.profile.base_radius,
+    })
+    return out
