@@ -27,7 +27,7 @@ def test_period_doubling_curve_of_the_rigid_impact_oscillator_is_the_closed_form
     curve = bifurcation_curve(lambda sigma: _rigid(2.5, sigma), "period-doubling", WALLS, 2.6589, 0.1,
                               second_name="sigma")
     assert "last value" in curve.stopped and curve.seconds.tolist() == WALLS.tolist()
-    assert np.max(np.abs(curve.parameters - expected)) < 1e-9, curve.parameters - expected   # measured 5e-12
+    assert np.max(np.abs(curve.parameters - expected)) < 1e-9, curve.parameters - expected   # measured 2.6e-12
     assert np.ptp(expected) > 0.15                              # the curve moves: W from 2.659 to 2.457
     for point in curve.points:
         assert np.min(np.abs(point.orbit.multipliers + 1.0)) < 1e-6
