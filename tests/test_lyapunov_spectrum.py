@@ -14,6 +14,7 @@ distinct moduli, (sigma_min(U) ||a||, sigma_max(U) ||a||) for a complex pair; th
 the exponents is exact (ln|det B| / T), so lambda_2 carries the same bound.
 """
 
+import json
 import math
 
 import numpy as np
@@ -24,6 +25,7 @@ from scipy.optimize import fsolve
 import camdyn
 from camdyn.analysis.lyapunov import lyapunov_spectrum, model_spectrum
 from camdyn.continuation import find_orbit, system_problem
+from camdyn.cli.app import main
 from camdyn.errors import ParameterError
 from camdyn.systems import registry as systems
 
@@ -200,3 +202,46 @@ def test_cam_follower_periodic_exponents_are_the_floquet_exponents_of_shooting(r
                                atol=_finite_time_bound(monodromy, periods, period) + accuracy)
     assert result.per_period == pytest.approx(result.exponents * period, rel=1e-12)
     assert result.kaplan_yorke_dimension == 0.0 and result.speed == 12.0
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda: model_spectrum(systems.VARIATIONAL + 1, [1.0] * 5, [0.0] * 3, 1.0), "registered model"),
+    (lambda: model_spectrum(systems.OSCILLATOR, [1.0] * 5, [0.0, 0.0], 1.0), "3 finite numbers"),
+    (lambda: model_spectrum(systems.OSCILLATOR, [1.0] * 5, [0.0] * 3, 0.0), "period must be positive"),
+    (lambda: model_spectrum(systems.OSCILLATOR, [1.0] * 5, [0.0] * 3, 1.0, weights=[1.0, -1.0]), "weights"),
+    (lambda: model_spectrum(systems.OSCILLATOR, [1.0] * 5, [0.0] * 3, 1.0, periods=0), "periods"),
+    (lambda: model_spectrum(systems.OSCILLATOR, [1.0] * 5, [0.0] * 3, 1.0, transient=-1), "transient"),
+    (lambda: model_spectrum(systems.OSCILLATOR, [1.0] * 5, [0.0] * 3, 1.0, rtol=1.0), "rtol"),
+    (lambda: lyapunov_spectrum("sundar2014-impact"), "load it first"),
+])
+def test_bad_input_is_refused_before_any_work(call, words):
+    with pytest.raises(ParameterError, match=words):
+        call()
+
+
+def test_cam_follower_refusals(rig):
+    with pytest.raises(ParameterError, match="constant cam motion"):
+        lyapunov_spectrum(rig.with_values(**{"motion.kind": "ramp", "motion.start_speed": 1.0,
+                                             "motion.ramp_time": 1.0}))
+    with pytest.raises(ParameterError, match="revolutions"):
+        lyapunov_spectrum(rig, speed=12.0, revolutions=0)
+    with pytest.raises(ParameterError, match="does not move"):
+        lyapunov_spectrum(rig, speed=0.0)
+
+
+def test_cli_lyapunov_spectrum_json_and_text(capsys):
+    args = ["lyapunov", "sundar2014-impact", "--set", "cam.runout=3.5mm", "--speed", "12Hz", "--revolutions", "60",
+            "--transient", "40", "--spectrum"]
+    assert main(args + ["--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    direct = lyapunov_spectrum(camdyn.load_system("sundar2014-impact", {"cam.runout": "3.5 mm"}), speed=12.0,
+                               revolutions=60, transient=40)
+    # the command passes the preset, --set, --speed, --revolutions and --transient through
+    np.testing.assert_allclose(doc["summary"]["spectrum_per_s"], direct.exponents, rtol=1e-12)
+    np.testing.assert_allclose(doc["summary"]["spectrum_per_revolution"], direct.exponents / 12.0, rtol=1e-12)
+    assert doc["summary"]["spectrum_sum_per_s"] == pytest.approx(direct.total, rel=1e-12)
+    assert doc["kaplan_yorke_dimension"] == 0.0 and doc["spectrum_events"] == direct.events
+    assert main(args) == 0
+    assert "Lyapunov spectrum (variational equations with saltation)" in capsys.readouterr().out
+    assert main(args[:-1] + ["--json"]) == 0
+    assert "spectrum_per_s" not in json.loads(capsys.readouterr().out)["summary"]
