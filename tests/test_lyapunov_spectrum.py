@@ -25,8 +25,8 @@ from scipy.optimize import fsolve
 import camdyn
 from camdyn.analysis.chaos import lyapunov_exponent
 from camdyn.analysis.lyapunov import lyapunov_spectrum, model_spectrum
-from camdyn.continuation import find_orbit, system_problem
 from camdyn.cli.app import main
+from camdyn.continuation import find_orbit, system_problem
 from camdyn.errors import ParameterError
 from camdyn.systems import registry as systems
 
