@@ -28,6 +28,10 @@ from camdyn.analysis.lyapunov import lyapunov_spectrum, model_spectrum
 from camdyn.cli.app import main
 from camdyn.continuation import find_orbit, system_problem
 from camdyn.errors import ParameterError
+from camdyn.integrator import driver
+from camdyn.model import translating_follower as translating
+from camdyn.simulation.sensitivity import integrate_variational
+from camdyn.simulation.translating import alzate_rig
 from camdyn.systems import registry as systems
 
 
@@ -224,6 +228,76 @@ def test_cam_follower_chaotic_largest_exponent_agrees_with_the_two_trajectory_es
     assert abs(spectrum.largest - two.exponent) < 3 * math.hypot(0.18, 0.27)
     assert 1.0 < spectrum.kaplan_yorke_dimension < 2.0
     assert spectrum.kaplan_yorke_dimension == pytest.approx(1 + spectrum.exponents[0] / -spectrum.exponents[1])
+
+
+# --- the translating follower on the Alzate / di Bernardo cam (Siconos example), rigid
+# contact with Newton's restitution e = 0.8, no damping
+def _alzate(rpm):
+    """(p, start on the cam at the end of the base dwell, period [s]) at ``rpm``."""
+    speed = rpm * 2 * math.pi / 60
+    p = alzate_rig().pack(speed, math.pi / 2)
+    _, lift, lift_rate, _, _ = translating.cam(0.0, p)
+    return p, np.array([lift, lift_rate]), 2 * math.pi / speed
+
+
+def test_translating_follower_rebound_from_the_moving_cam_carries_the_reset_rate_in_time():
+    """An impact on the cam's flank, where its lift accelerates (s_ddot = 1500 m/s^2 at
+    660 rpm): the reset x'+ = s_dot(t) - e (x'- - s_dot(t)) moves with time, and the
+    saltation matrix needs its rate R_t = (0, (1 + e) s_ddot) (Leine and Nijmeijer 2004,
+    eq. 1 of camdyn.systems.variational). The state-transition matrix over one period
+    across it must equal the central differences of two plain runs (steps 1e-8 m and
+    1e-6 m/s; at steps ten and a hundred times smaller they move by 2.6e-6 and 1.5e-5 of
+    the matrix, round-off). Measured 4e-7 of the matrix's largest entry; 1e-5 allowed.
+    Without R_t the matrix was off by 0.88 of it (-16.5 against -133.9 m/s per m, and
+    the spectrum at 660 rpm came out negative, -0.15 per revolution)."""
+    p, y, period = _alzate(660)
+    t = 0.0
+
+    def advance(state, start, span):
+        out, _, events, counters = driver.integrate(systems.TRANSLATING_FOLLOWER, p, state, start, start + span,
+                                                    np.array([start + span]), 1e-12, 1e-14, period / 64,
+                                                    driver.METHOD_AUTO, 10 ** 8, 1000, True)
+        return out[0].copy(), events[:int(counters[driver.COUNT_EVENTS])]
+    for _ in range(150):
+        y, _ = advance(y, t, period)
+        t += period
+    for _ in range(40):   # the first period whose one impact lands where the lift accelerates
+        _, events = advance(y, t, period)
+        if len(events) == 1 and abs(translating.cam(events[0, 0], p)[3]) > 100.0:
+            break
+        y, _ = advance(y, t, period)
+        t += period
+    else:
+        pytest.fail("no impact on the flank within 40 periods")
+    matrix = integrate_variational(systems.TRANSLATING_FOLLOWER, p, y, t, t + period, rtol=1e-12, atol=1e-14,
+                                   max_step=period / 64).matrix
+    differences = np.empty((2, 2))
+    for j, step in enumerate((1e-8, 1e-6)):
+        shift = np.zeros(2)
+        shift[j] = step
+        differences[:, j] = (advance(y + shift, t, period)[0] - advance(y - shift, t, period)[0]) / (2 * step)
+    assert np.max(np.abs(matrix - differences)) < 1e-5 * np.max(np.abs(differences))
+
+
+@pytest.mark.parametrize("rpm, chaotic", [(358, False), (660, True), (700, False)])
+def test_translating_follower_spectrum_is_positive_only_at_660_rpm_and_sums_to_the_impacts(rpm, chaotic):
+    """The Siconos benchmark's regimes (tests/test_siconos_benchmark.py: period 3 at 358
+    rpm, period 1 at 700, chaotic at 660, where two runs part at about e^0.3 per
+    revolution): the largest exponent is positive at 660 rpm only (measured 0.42 per
+    revolution; -0.41 and -0.21 at 358 and 700). With no damping trace J = 0, and an
+    impact on the moving cam has det S = e^2 (S = [[-e, 0], [(1 + e)(x'' - s_ddot) /
+    (x'- - s_dot), -e]] from eq. 1 with R_t), so the sum is 2 ln(e) per impact per second
+    (every event here is an impact: a capture into sustained contact would erase the
+    perturbation, -inf). Measured off by 0.8e-10 to 3.8e-10 1/s (the matrix's integration
+    error over 400 to 1067 impacts); 1e-9 1/s allowed."""
+    p, y, period = _alzate(rpm)
+    result = model_spectrum(systems.TRANSLATING_FOLLOWER, p, y, period, periods=400, transient=200)
+    if chaotic:
+        assert result.largest * period > 0.2
+    else:
+        assert result.largest < 0.0
+    rate = result.events / (result.periods * period)
+    assert result.total == pytest.approx(2 * math.log(0.8) * rate, abs=1e-9)
 
 
 @pytest.mark.parametrize("call, words", [
