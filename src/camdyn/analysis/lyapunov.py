@@ -32,6 +32,7 @@ trajectories (exact for every damping law whose force depends on the state only)
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -267,4 +268,4 @@ def lyapunov_spectrum(system: System, speed: float | None = None, revolutions: i
     prep = prepare(system)
     result = model_spectrum(systems.CAM_FOLLOWER, prep.p, prep.y0, period, periods=revolutions, transient=transient,
                             weights=[1.0, period / (2.0 * math.pi)], rtol=rtol, atol=atol, progress=progress)
-    return LyapunovSpectrum(**{**result.__dict__, "speed": system.motion.speed})
+    return dataclasses.replace(result, speed=system.motion.speed)
