@@ -115,22 +115,42 @@ def lyapunov(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              speed: str = typer.Option(..., help="Cam speed, e.g. 18Hz or 1080rpm."),
              revolutions: int = typer.Option(400, help="Cam periods averaged."),
              transient: int = typer.Option(200, help="Cam periods dropped first."),
+             spectrum: bool = typer.Option(False, "--spectrum", help="Also both exponents from the variational "
+                                                                     "equations with saltation [1/s]."),
              json_: bool = JsonOption):
     """Largest Lyapunov exponent of the steady motion at one speed (two nearby trajectories
-    through every impact, renormalised once per revolution)."""
+    through every impact, renormalised once per revolution); with --spectrum also the
+    whole spectrum from the state-transition matrix, re-orthonormalised once per revolution."""
     from camdyn.analysis.chaos import lyapunov_exponent
     from camdyn.cli.common import load_source
     from camdyn.params.units import parse_speed
 
-    result = lyapunov_exponent(load_source(source, set_), speed=parse_speed(speed), revolutions=revolutions,
-                               transient=transient)
+    system = load_source(source, set_)
+    hz = parse_speed(speed)
+    result = lyapunov_exponent(system, speed=hz, revolutions=revolutions, transient=transient)
     half = result.running[revolutions // 2 - 1] if revolutions >= 2 else float("nan")
+    full = None
+    if spectrum:
+        from camdyn.analysis.lyapunov import lyapunov_spectrum
+        full = lyapunov_spectrum(system, speed=hz, revolutions=revolutions, transient=transient)
     if json_:
-        emit_json("lyapunov", {"speed_hz": result.speed, "exponent_per_s": result.exponent,
-                               "per_revolution": result.per_revolution, "chaotic": bool(result.exponent > 0)},
-                  exponent_half_record_per_s=float(half), revolutions=revolutions, transient=transient)
+        summary = {"speed_hz": result.speed, "exponent_per_s": result.exponent,
+                   "per_revolution": result.per_revolution, "chaotic": bool(result.exponent > 0)}
+        details = {}
+        if full is not None:
+            summary.update(spectrum_per_s=[float(x) for x in full.exponents],
+                           spectrum_per_revolution=[float(x) for x in full.per_period],
+                           spectrum_sum_per_s=full.total)
+            details = {"kaplan_yorke_dimension": full.kaplan_yorke_dimension, "spectrum_events": full.events}
+        emit_json("lyapunov", summary, exponent_half_record_per_s=float(half), revolutions=revolutions,
+                  transient=transient, **details)
         return
     verdict = "chaotic" if result.exponent > 0 else "not chaotic (attracting)"
     console.print(f"largest Lyapunov exponent at {result.speed:g} Hz: {result.exponent:.4g} 1/s "
                   f"({result.per_revolution:.4g} per revolution; {float(half):.4g} 1/s over the first half): "
                   f"{verdict}", highlight=False, soft_wrap=True)
+    if full is not None:
+        values = ", ".join(f"{x:.4g}" for x in full.exponents)
+        console.print(f"Lyapunov spectrum (variational equations with saltation): {values} 1/s; sum "
+                      f"{full.total:.4g} 1/s; Kaplan-Yorke dimension {full.kaplan_yorke_dimension:.3g}",
+                      highlight=False, soft_wrap=True)
