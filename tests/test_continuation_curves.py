@@ -72,3 +72,27 @@ def test_period_doubling_curve_of_the_chapter3_rig_bounds_the_brute_force_map(tm
     # the doubling moves to higher speeds by more than three of the map's speed steps
     # (measured 16.016 -> 16.992 Hz)
     assert np.all(np.diff(curve.parameters) > 0) and np.ptp(curve.parameters) > 3 * 0.25
+
+
+def test_map_draws_the_curve_and_refuses_bad_curves_before_work(tmp_path, capsys):
+    import xarray as xr
+
+    from camdyn.cli.app import main
+    out = tmp_path / "map.nc"
+    base = ["map", "sundar2014-impact", "--x", "cam.runout=2.5mm:3.5mm:2", "--y", "speed=15Hz:17Hz:5",
+            "--revolutions", "150", "--discard", "100", "--rtol", "1e-9", "--atol", "1e-11", "--workers", "1",
+            "--quiet", "--out", str(out)]
+    for curve in ("wobble=16Hz", "period-doubling", "neimark-sacker=16Hz", "period-doubling=16kg"):
+        assert main([*base, "--curve", curve]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("error:") and len(err.splitlines()) == 1 and not out.exists()
+    assert main([*base, "--curve", "period-doubling=16.3Hz"]) == 0
+    assert "period-doubling: 2 points" in capsys.readouterr().out
+    with xr.open_dataset(out) as ds:
+        curve = ds["period_doubling_curve"].values        # at 2.5 and 3.5 mm: 16.314 and 16.016 Hz
+        assert ds["period_doubling_curve"].attrs["units"] == "Hz" and curve[0] > curve[1]
+        for i, speed in enumerate(curve):                 # the map's period changes across it
+            periods = ds["period"].values[i]
+            speeds = ds["motion.speed"].values
+            assert periods[speeds < speed - 0.1][-1] == 1 and periods[speeds > speed + 0.1][0] == 2
+    assert out.with_suffix(".png").stat().st_size > 10_000

@@ -67,6 +67,8 @@ SOURCES = {
     "stick_slip_cycle.png": "python examples/mechanisms.py",
     "siconos_camfollower.png": "python examples/siconos_comparison.py",
     "flexible_pivot_resonance.png": "python examples/flexible_pivot.py",
+    "continuation_curves.png": "camdyn map sundar2014-impact --x cam.runout=1.5mm:3.5mm:9 "
+                               "--y speed=14Hz:17.5Hz:15 --curve period-doubling=16.99Hz",
     "translating_bifurcation.png": "python examples/translating_bifurcation.py",
     "friction_errors.png": "python examples/friction_error_tables.py",
     "impact_hysteresis.png": "python examples/impact_damping_tables.py",
@@ -193,6 +195,26 @@ def job_restitution(work: Path) -> dict:
         law: _number(text, rf"{law}: .*?0\.50: ([-+\d.]+) %") for law in laws}}}
 
 
+def job_curves(work: Path) -> dict:
+    """``camdyn map --curve``: the chapter 3 rig's period-doubling curve over (runout, speed)
+    on its brute-force regime map."""
+    import numpy as np
+    import xarray as xr
+
+    result, plot = work / "curves.nc", work / "curves.png"
+    run(camdyn("map", "sundar2014-impact", "--x", "cam.runout=1.5mm:3.5mm:9", "--y", "speed=14Hz:17.5Hz:15",
+               "--curve", "period-doubling=16.99Hz", "--revolutions", 150, "--discard", 100, "--rtol", 1e-9,
+               "--atol", 1e-11, "--out", result, "--plot", plot, "--quiet"), work)
+    shutil.copyfile(plot, FIGURES / "continuation_curves.png")
+    with xr.open_dataset(result) as ds:
+        curve = ds["period_doubling_curve"]
+        return {"continuation_curves.png": {
+            "runout_m": [float(v) for v in ds["cam.runout"].values],
+            "period_doubling_hz": [float(v) for v in curve.values], "stopped": curve.attrs["stopped"],
+            "period_counts": {str(int(k)): int(n) for k, n in zip(*np.unique(ds["period"].values,
+                                                                         return_counts=True))}}}
+
+
 def _script(name: str, figures: tuple[str, ...], args: tuple[str, ...] = (), data: bool = False):
     """A job that runs ``examples/name``; with ``data``, the script's ``--data FILE`` gives
     the numbers each figure shows (recorded in figures.json; the tests draw from them)."""
@@ -212,7 +234,8 @@ JOBS = {"demo": job_demo, "sweeps": job_sweeps, "fig2_9": job_fig2_9,
         "mechanisms": _script("mechanisms.py", ("mechanisms_speed_fluctuation.png", "stick_slip_cycle.png"),
                               data=True),
         "siconos": _script("siconos_comparison.py", ("siconos_camfollower.png",), data=True),
-        "flexible_pivot": _script("flexible_pivot.py", ("flexible_pivot_resonance.png",), data=True)}
+        "flexible_pivot": _script("flexible_pivot.py", ("flexible_pivot_resonance.png",), data=True),
+        "curves": job_curves}
 SLOW = {"friction_tables": _script("friction_error_tables.py", ("friction_errors.png",), data=True),
         "impact_tables": _script("impact_damping_tables.py",
                                  ("impact_hysteresis.png", "impact_residue_landscape.png", "restitution_fit.png")),

@@ -18,7 +18,7 @@ import numpy as np
 import xarray as xr
 
 from camdyn.analysis.kinematics import inverse_kinematics, loss_of_contact_speed
-from camdyn.errors import CamdynError
+from camdyn.errors import CamdynError, ParameterError
 from camdyn.io.atomic import atomic_output
 from camdyn.sweeps.spec import SweepSpec
 
@@ -117,9 +117,9 @@ def parse_curve(text: str, spec: SweepSpec) -> tuple[str, float]:
     kind, sep, guess = text.partition("=")
     kind = kind.strip()
     if not sep or kind not in CURVE_KINDS or not guess.strip():
-        raise CamdynError(f"--curve: expected KIND=VALUE with KIND one of {', '.join(CURVE_KINDS)}, got {text!r}")
+        raise ParameterError(f"--curve: expected KIND=VALUE with KIND one of {', '.join(CURVE_KINDS)}, got {text!r}")
     if len(spec.dimensions) != 2:
-        raise CamdynError("--curve needs a map over two parameters")
+        raise ParameterError("--curve needs a map over two parameters")
     key = spec.vary[1].key
     return kind, float(convert_value(key, guess.strip(), {}))
 
