@@ -5,15 +5,19 @@ saltation matrix applied at every event.
 For a model of ``n`` states the variational system has ``n + n^2`` states: the model's
 ``y``, then ``Phi`` (row-major, ``Phi[i, j] = Y[n + i n + j]``) with ``Phi' = J(t, y) Phi``
 between events. At an event of guard ``g`` (before: mode ``-``; after: mode ``+``, with the
-reset ``y+ = R(y-)``) the matrix jumps by the saltation matrix (Aizerman and Gantmacher
+reset ``y+ = R(y-, t)``) the matrix jumps by the saltation matrix (Aizerman and Gantmacher
 1958; Leine and Nijmeijer 2004, doi:10.1007/978-3-540-44398-8)::
 
-    S = R_y + (f+ - R_y f-) grad(g)^T / (dg/dt)-,      Phi+ = S Phi-                (1)
+    S = R_y + (f+ - R_y f- - R_t) grad(g)^T / (dg/dt)-,      Phi+ = S Phi-          (1)
 
 where ``(dg/dt)-`` is the guard's exact rate before the event (the system's own guard
-rates), ``grad(g)`` its gradient in ``y`` and ``R_y`` the reset's Jacobian, both by
-central differences of the model's guard and transition functions (the guards and resets
-are smooth in ``y``). Over one period of a periodic orbit ``Phi`` is the monodromy
+rates), ``grad(g)`` its gradient in ``y``, ``R_y`` the reset's Jacobian and ``R_t`` its
+rate in time at fixed ``y`` (zero unless the reset moves with the forcing: the translating
+follower lands on a moving cam, ``x'+ = (1 + e) s_dot(t) - e x'-``, or is captured onto
+it, ``y+ = (s(t), s_dot(t))``), all by central differences of the model's guard and
+transition functions (the guards and resets are smooth in ``y`` and ``t``). ``R_t``
+comes from differentiating ``y+(t* + dt) = R(y-(t* + dt), t* + dt)`` in the shift ``dt``
+of the event time, as the other terms do. Over one period of a periodic orbit ``Phi`` is the monodromy
 matrix, whose eigenvalues are the Floquet multipliers.
 
 **Parameter sensitivities.** With ``k`` parameters ``q_j`` the system has ``n k`` more
@@ -21,7 +25,7 @@ states, the columns ``Y_j = d y / d q_j`` (``Y[n + n^2 + j n + i]``), with
 ``Y_j' = J Y_j + df/dq_j`` between events and, at an event (differentiating the event time
 ``g(y(t*), t*, q) = 0`` with respect to ``q_j``)::
 
-    Y_j+ = S Y_j- + dR/dq_j + (f+ - R_y f-) (dg/dq_j) / (dg/dt)-                   (2)
+    Y_j+ = S Y_j- + dR/dq_j + (f+ - R_y f- - R_t) (dg/dq_j) / (dg/dt)-             (2)
 
 A parameter is a direction in the parameter vector: its slots ``p[:L]`` move by
 ``dp/dq_j`` per unit of ``q_j``. The ``k`` directions follow the model's ``L`` slots in
@@ -178,6 +182,23 @@ def _reset_jacobian(model, k, t, x, values, mode, p, reset):
 
 
 @numba.njit(cache=True)
+def _reset_time_rate(model, k, t, x, values, mode, p, rate):
+    """Central difference of the transition's reset ``R(y, t)`` in time at fixed ``y``,
+    ``R_t`` of eq. (1) (exactly zero for a reset that does not read ``t``)."""
+    n = x.shape[0]
+    step = DIFFERENCE_STEP * max(abs(t), 1.0)
+    later = t + step
+    earlier = t - step
+    span = later - earlier   # the step as represented
+    up = x.copy()
+    down = x.copy()
+    models.transition(model, k, later, up, values, mode.copy(), p)
+    models.transition(model, k, earlier, down, values, mode.copy(), p)
+    for r in range(n):
+        rate[r] = (up[r] - down[r]) / span
+
+
+@numba.njit(cache=True)
 def _parameter_jumps(model, count, k, t, x, values, mode, p, reset_rates, guard_rates):
     """Central differences over each parameter ``j`` of the reset, ``dR/dq_j`` into
     ``reset_rates[:, j]``, and of guard ``k``, ``dg/dq_j`` into ``guard_rates[j]``, at the
@@ -205,7 +226,7 @@ def _parameter_jumps(model, count, k, t, x, values, mode, p, reset_rates, guard_
 def saltation(model, k, t, x, values, mode, p, matrix):
     """The model's transition for guard ``k`` at ``t`` [s] (``x`` and ``mode`` updated in
     place) and its saltation matrix (eq. 1) into ``matrix`` (n x n). Returns the jump of
-    the field across the event, ``f+ - R_y f-``, divided by the guard's rate before it."""
+    the field across the event, ``f+ - R_y f- - R_t``, divided by the guard's rate before it."""
     n = x.shape[0]
     m = models.guard_count(model)
     f_before = np.empty(n)
@@ -217,10 +238,12 @@ def saltation(model, k, t, x, values, mode, p, matrix):
     _guard_gradient(model, k, t, x, p, grad)
     reset = np.empty((n, n))
     _reset_jacobian(model, k, t, x, values, mode, p, reset)
+    reset_rate = np.empty(n)
+    _reset_time_rate(model, k, t, x, values, mode, p, reset_rate)
     models.transition(model, k, t, x, values, mode, p)
     f_after = np.empty(n)
     models.rhs(model, t, x, mode, p, f_after)
-    jump = (f_after - reset @ f_before) / rates[k]
+    jump = (f_after - reset @ f_before - reset_rate) / rates[k]
     for i in range(n):
         for j in range(n):
             matrix[i, j] = reset[i, j] + jump[i] * grad[j]
