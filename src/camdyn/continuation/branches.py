@@ -16,7 +16,8 @@ Test functions, evaluated at every point; a sign change between two points is lo
 by the secant method (Illinois variant) along the arclength (Seydel 2010, sec. 5.3):
 
 * fold: the parameter component of the tangent;
-* period doubling: ``det(M + I)`` (a real multiplier crosses -1);
+* period doubling: ``det(M + I)`` (a real multiplier crosses -1; a sign change where
+  the monodromy matrix jumps, with no multiplier near -1, is discarded);
 * Neimark-Sacker: ``prod_{i<j} (mu_i mu_j - 1)`` (a complex pair crosses the unit
   circle; a real pair with product 1, a neutral saddle, is discarded after location);
 * grazing: the number of impacts per period changes (located by bisection, as the
@@ -42,6 +43,11 @@ from camdyn.errors import ParameterError, SimulationError
 
 #: Smallest arclength step by default (scaled units) [-].
 MIN_STEP = 1e-6
+#: A located period doubling needs a multiplier within this of -1 [-]: where the sign of
+#: ``det(M + I)`` changes because the monodromy matrix jumps (a translating follower's
+#: impact crossing a joint of its cam profile, where the cam's acceleration jumps) the
+#: secant converges onto the jump with no multiplier near -1, and no doubling is reported.
+JUMP_TOLERANCE = 0.1
 
 __all__ = ["Bifurcation", "Branch", "continue_orbits", "continuation_scales", "KINDS"]
 
@@ -232,10 +238,11 @@ def _locate(job: _Continuation, a: _Point, b: _Point, kind: str, max_iterations:
             if side == 1 and kind != "grazing":
                 f_lo *= 0.5
             side = 1
-    if kind == "neimark-sacker":
-        mu = best.orbit.multipliers
-        if not np.any(np.abs(mu.imag) > 1e-8 * np.abs(mu)):
-            return None                                               # a neutral saddle
+    mu = best.orbit.multipliers
+    if kind == "neimark-sacker" and not np.any(np.abs(mu.imag) > 1e-8 * np.abs(mu)):
+        return None                                                   # a neutral saddle
+    if kind == "period-doubling" and not np.min(np.abs(mu + 1.0)) < JUMP_TOLERANCE:
+        return None          # det(M + I) jumped across zero: the monodromy is discontinuous there
     return best
 
 
