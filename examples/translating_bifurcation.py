@@ -1,15 +1,21 @@
 """Bifurcation diagram of the Alzate / di Bernardo rig (preset ``alzate``, rigid contact)
-over 100-750 rpm, for docs/profiles.md: the follower's position and velocity at cam angle 0
-of every recorded revolution against the cam speed.
+over 100-750 rpm, for docs/profiles.md and docs/continuation.md: the follower's position
+and velocity at cam angle 0 of every recorded revolution against the cam speed, with the
+continuation's branches of periodic orbits over it.
 
 - translating_bifurcation.png: the diagram, with the lift-off speed and the 358 and 660
-  rpm points marked;
+  rpm points marked, and the branches (:func:`branches`): the period-1 orbit from 700 rpm
+  down to 640 and up to 760 rpm, the period-3 orbit from 358 rpm down to 300 and up to
+  400 rpm, and the period-2 branch born at the period-1 orbit's period doubling;
+- translating_branches.png: the branches alone over 640-760 rpm, with the diagram's
+  points there;
 - with ``--section FILE.nc``: the section itself (:func:`camdyn.analysis.poincare.poincare_section`);
 - with ``--data FILE.json``: the numbers the figure's record keeps (speeds, settings,
   time taken, speeds whose runs stopped, revolutions run at a fallback tolerance).
 
 Run: python examples/translating_bifurcation.py [--step RPM] [--transient N] [--revolutions N]
-(about 6 minutes at the defaults here, two cores shared with other work)
+(about 6 minutes at the defaults here, two cores shared with other work; the branches take
+seconds once compiled)
 """
 
 from __future__ import annotations
@@ -26,6 +32,9 @@ matplotlib.use("Agg")
 import numpy as np  # noqa: E402
 
 from camdyn.analysis.poincare import poincare_section  # noqa: E402
+from camdyn.continuation.switching import switch_branch  # noqa: E402
+from camdyn.continuation.translating import RPM, trace_translating, translating_dataset  # noqa: E402
+from camdyn.errors import CamdynError  # noqa: E402
 from camdyn.io.lift_table import load_translating  # noqa: E402
 from camdyn.io.netcdf import save_netcdf  # noqa: E402
 from camdyn.plotting.translating import plot_poincare_diagram  # noqa: E402
@@ -36,6 +45,38 @@ OUT = Path(__file__).resolve().parent.parent / "docs" / "figures"
 LOWEST, HIGHEST, STEP = 100.0, 750.0, 2.0
 #: revolutions dropped, then recorded, per speed, and the relative tolerance [-]
 TRANSIENT, REVOLUTIONS, RTOL = 60, 40, 1e-10
+#: branches continued: (revolutions per period, start, stop) [rpm]
+BRANCHES = ((1, 700.0, 640.0), (1, 700.0, 760.0), (3, 358.0, 300.0), (3, 358.0, 400.0))
+#: revolutions from rest before the first orbit is sought, by its period: at 358 rpm the
+#: chaotic transient outlasts 100 revolutions (Newton's method then lands on the unstable
+#: period-3 orbit beyond the fold)
+TRANSIENTS = {1: 100, 3: 300}
+
+
+def branches(rig):
+    """The continued branches (:data:`BRANCHES`) and the period-doubled branches born on
+    them within their range, as one dataset
+    (:func:`camdyn.continuation.translating.translating_dataset`), and a line per branch:
+    its range, why it ended and its bifurcations."""
+    found, lines, problem = [], [], None
+    for periods, start, stop in BRANCHES:
+        problem, branch = trace_translating(rig, start * RPM, stop * RPM, periods, max_points=400,
+                                            transient=TRANSIENTS[periods])
+        found.append(branch)
+        for item in branch.bifurcations:
+            if item.kind != "period-doubling":
+                continue
+            try:
+                found.append(switch_branch(problem, item, stop * RPM, step=0.01, max_step=0.05, max_points=400))
+            except CamdynError as exc:
+                lines.append(f"no switch at the doubling at {item.parameter / RPM:.3f} rpm: {exc}")
+    for index, branch in enumerate(found):
+        speeds = [o.parameter / RPM for o in branch.orbits]
+        marks = ", ".join(f"{b.kind} {b.parameter / RPM:.4f} rpm" for b in branch.bifurcations)
+        lines.append(f"branch {index}: period {branch.orbits[0].periods}, {speeds[0]:.4f} to {speeds[-1]:.4f} rpm, "
+                     f"{len(speeds)} orbits, {sum(o.stable for o in branch.orbits)} stable; {branch.stopped}; "
+                     f"{marks or 'no bifurcation'}")
+    return translating_dataset(problem, found), lines
 
 
 def main() -> None:
@@ -55,7 +96,14 @@ def main() -> None:
     liftoff = liftoff_speed(rig) * 60.0 / (2.0 * math.pi)
     marks = {f"lift-off {liftoff:.2f} rpm": liftoff, "358 rpm": 358.0, "660 rpm": 660.0}
     args.out.mkdir(parents=True, exist_ok=True)
-    plot_poincare_diagram(section, args.out / "translating_bifurcation.png", marks)
+    clock = time.perf_counter()
+    continued, lines = branches(rig)
+    branch_seconds = time.perf_counter() - clock
+    print("\n".join(lines))
+    plot_poincare_diagram(section, args.out / "translating_bifurcation.png", marks, branches=continued)
+    near = section.sel(speed_rpm=slice(640.0, 760.0))
+    plot_poincare_diagram(near, args.out / "translating_branches.png", None,
+                          branches=continued.isel(point=np.flatnonzero(continued["speed_rpm"].values >= 600.0)))
     if args.section is not None:
         save_netcdf(section, args.section)
     stopped = [f"{s:g}" for s, status in zip(speeds, section["status"].values) if status != "ok"]
@@ -64,8 +112,9 @@ def main() -> None:
         numbers = {"speeds_rpm": [float(speeds[0]), float(speeds[-1]), float(args.step)],
                    "transient": args.transient, "revolutions": args.revolutions, "rtol": RTOL,
                    "liftoff_rpm": round(liftoff, 4), "seconds": round(seconds, 1), "stopped": stopped,
-                   "fallback_revolutions": fallback}
-        args.data.write_text(json.dumps({"translating_bifurcation.png": numbers}, indent=1) + "\n")
+                   "fallback_revolutions": fallback, "branches": lines, "branch_seconds": round(branch_seconds, 1)}
+        args.data.write_text(json.dumps({"translating_bifurcation.png": numbers,
+                                         "translating_branches.png": {"branches": lines}}, indent=1) + "\n")
     print(f"{speeds.size} speeds, {args.transient} + {args.revolutions} revolutions each, rtol {RTOL:g}: "
           f"{seconds:.0f} s; speeds stopped: {', '.join(stopped) or 'none'}; revolutions run at a fallback "
           f"tolerance: {fallback}")

@@ -26,9 +26,13 @@ continuation there is not reliable (docs/continuation.md, Limits).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
+import xarray as xr
 
+from camdyn.continuation.branches import MIN_STEP, Branch, continue_orbits
+from camdyn.continuation.orbits import Orbit, find_orbit, shoot
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError
 from camdyn.model import translating_follower as model
@@ -36,10 +40,12 @@ from camdyn.simulation import limits
 from camdyn.simulation.translating import TranslatingFollower
 from camdyn.systems import registry as systems
 
-__all__ = ["translating_problem", "SPEED_KEY"]
+__all__ = ["translating_problem", "trace_translating", "translating_dataset", "SPEED_KEY", "RPM"]
 
 #: The scalar parameter's name: the cam speed's key in the configuration files.
 SPEED_KEY = "motion.speed"
+#: One revolution per minute [rad/s].
+RPM = 2.0 * math.pi / 60.0
 
 
 def translating_problem(follower: TranslatingFollower, speed: float, phase: float = 0.0, initial_state=None,
@@ -93,3 +99,90 @@ def translating_problem(follower: TranslatingFollower, speed: float, phase: floa
     return Problem(systems.TRANSLATING_FOLLOWER, build, float(speed), template, model.STATE_SIZE, name=SPEED_KEY,
                    unit="rad/s", rtol=rtol, atol=atol, impact_sign=1.0,
                    key=SPEED_KEY)
+
+
+def trace_translating(follower: TranslatingFollower, start: float, stop: float, periods: int = 1, phase: float = 0.0,
+                      step: float = 0.01, max_points: int = 200, transient: int = 100, rtol: float = 1e-10,
+                      progress: Callable[[Orbit], None] | None = None) -> tuple[Problem, Branch]:
+    """The branch of period-``periods`` orbits from the cam speed ``start`` [rad/s]
+    towards ``stop`` [rad/s]: the orbit at ``start`` after ``transient`` revolutions from
+    the follower resting on the cam (Newton's method on the shooting residual), then
+    pseudo-arclength continuation (:func:`~camdyn.continuation.branches.continue_orbits`).
+
+    Raises
+    ------
+    ParameterError
+        For a bad range or setting, before any work.
+    SimulationError
+        If no orbit is found at ``start``.
+    """
+    for name, value in (("start", start), ("stop", stop)):
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0.0):
+            raise ParameterError(f"the {name} speed must be a positive number of rad/s, got {value!r}")
+    if start == stop:
+        raise ParameterError("the range must be two different speeds")
+    if int(periods) != periods or periods < 1:
+        raise ParameterError(f"the period must be a positive whole number of revolutions, got {periods}")
+    if transient < 1 or max_points < 2 or not step >= MIN_STEP:
+        raise ParameterError(f"transient must be at least 1, max_points at least 2 and step at least {MIN_STEP:g}")
+    problem = translating_problem(follower, start, phase, rtol=rtol, atol=rtol * 1e-2)
+    orbit = find_orbit(problem, periods=int(periods), transient=transient)
+    branch = continue_orbits(problem, orbit, stop, step=step, max_step=max(step, 0.05), max_points=max_points,
+                             progress=progress)
+    return problem, branch
+
+
+def _section(problem: Problem, orbit: Orbit) -> np.ndarray:
+    """The orbit's points on the stroboscopic section: ``(x [m], x' [m/s])`` at the start
+    of each of its revolutions."""
+    x, points = orbit.state, [orbit.state]
+    for _ in range(orbit.periods - 1):
+        x = shoot(problem, x, orbit.parameter, 1)
+        points.append(x)
+    return np.array(points)
+
+
+def translating_dataset(problem: Problem, branches: list[Branch]) -> xr.Dataset:
+    """The branches as a Dataset over ``point`` (the branches one after the other, their
+    index in ``branch``), ``section`` (an orbit's points on the stroboscopic section,
+    NaN past its ``periods``), ``multiplier`` and ``bifurcation``: the speed in rad/s and
+    rpm, stability, the section's ``x`` [m] and ``x_dot`` [m/s], impacts per period, the
+    multipliers and the located bifurcations."""
+    orbits = [(index, orbit) for index, branch in enumerate(branches) for orbit in branch.orbits]
+    if not orbits:
+        raise ParameterError("no orbit to store")
+    width = max(orbit.periods for _, orbit in orbits)
+    points = np.full((len(orbits), width, 2), np.nan)
+    mu = np.full((len(orbits), problem.unknowns), np.nan + 0j)
+    for i, (_, orbit) in enumerate(orbits):
+        section = _section(problem, orbit)
+        points[i, :section.shape[0]] = section
+        mu[i] = orbit.multipliers
+    found = [(index, item) for index, branch in enumerate(branches) for item in branch.bifurcations]
+    speed = np.array([orbit.parameter for _, orbit in orbits])
+    data = {
+        "parameter": ("point", speed, {"units": "rad/s", "long_name": "cam speed"}),
+        "speed_rpm": ("point", speed / RPM, {"units": "rpm", "long_name": "cam speed"}),
+        "branch": ("point", np.array([i for i, _ in orbits], dtype=np.int32), {"units": "1", "long_name": "branch"}),
+        "stable": ("point", np.array([o.stable for _, o in orbits], dtype=np.int8),
+                   {"units": "1", "long_name": "1 if every |multiplier| < 1"}),
+        "periods": ("point", np.array([o.periods for _, o in orbits], dtype=np.int32),
+                    {"units": "1", "long_name": "revolutions per orbit period"}),
+        "impacts_per_period": ("point", np.array([o.impacts_per_period for _, o in orbits], dtype=np.int32),
+                               {"units": "1", "long_name": "impacts per orbit period"}),
+        "poincare_x": (("point", "section"), points[:, :, 0],
+                       {"units": "m", "long_name": "follower position once per revolution (Poincare points)"}),
+        "poincare_x_dot": (("point", "section"), points[:, :, 1],
+                           {"units": "m/s", "long_name": "follower velocity once per revolution (Poincare points)"}),
+        "multiplier_real": (("point", "multiplier"), mu.real, {"units": "1", "long_name": "Floquet multiplier, real"}),
+        "multiplier_imag": (("point", "multiplier"), mu.imag, {"units": "1", "long_name": "Floquet multiplier, imag"}),
+        "bifurcation_kind": ("bifurcation", np.array([b.kind for _, b in found], dtype=str),
+                             {"units": "1", "long_name": "fold, period-doubling, neimark-sacker or grazing"}),
+        "bifurcation_parameter": ("bifurcation", np.array([b.parameter for _, b in found], dtype=float),
+                                  {"units": "rad/s", "long_name": "cam speed at the bifurcation"}),
+        "bifurcation_branch": ("bifurcation", np.array([i for i, _ in found], dtype=np.int32),
+                               {"units": "1", "long_name": "branch index"}),
+    }
+    return xr.Dataset(data, attrs={"parameter_name": SPEED_KEY, "parameter_units": "rad/s",
+                                   "method": "single shooting, pseudo-arclength continuation",
+                                   "rtol": problem.rtol, "atol": problem.atol})
