@@ -7,8 +7,8 @@ continuation's branches of periodic orbits over it.
   rpm points marked, and the branches (:func:`branches`): the period-1 orbit from 700 rpm
   down to 640 and up to 760 rpm, the period-3 orbit from 358 rpm down to 300 and up to
   400 rpm, and the period-2 branch born at the period-1 orbit's period doubling;
-- translating_branches.png: the branches alone over 640-760 rpm, with the diagram's
-  points there;
+- translating_branches.png and translating_branches_358.png: the branches over 640-760
+  and 345-380 rpm, over diagrams of their own at finer speed steps (:data:`WINDOWS`);
 - with ``--section FILE.nc``: the section itself (:func:`camdyn.analysis.poincare.poincare_section`);
 - with ``--data FILE.json``: the numbers the figure's record keeps (speeds, settings,
   time taken, speeds whose runs stopped, revolutions run at a fallback tolerance).
@@ -38,7 +38,7 @@ from camdyn.errors import CamdynError  # noqa: E402
 from camdyn.io.lift_table import load_translating  # noqa: E402
 from camdyn.io.netcdf import save_netcdf  # noqa: E402
 from camdyn.plotting.translating import plot_poincare_diagram  # noqa: E402
-from camdyn.simulation.translating import liftoff_speed  # noqa: E402
+from camdyn.simulation.translating import liftoff_speed, simulate_translating  # noqa: E402
 
 OUT = Path(__file__).resolve().parent.parent / "docs" / "figures"
 #: cam speeds [rpm]: from, to, and the default step
@@ -51,6 +51,22 @@ BRANCHES = ((1, 700.0, 640.0), (1, 700.0, 760.0), (3, 358.0, 300.0), (3, 358.0, 
 #: chaotic transient outlasts 100 revolutions (Newton's method then lands on the unstable
 #: period-3 orbit beyond the fold)
 TRANSIENTS = {1: 100, 3: 300}
+#: zoomed figures: file, first and last speed and step [rpm], revolutions dropped and recorded
+WINDOWS = (("translating_branches.png", 640.0, 760.0, 1.0, 100, 30),
+           ("translating_branches_358.png", 345.0, 380.0, 0.5, 100, 30))
+
+
+def corner(rig, orbit):
+    """The orbit's impact nearest to a joint of the cam profile: its cam angle [rad] and
+    its distance from the joint [rad], from a simulation of one orbit period."""
+    period = orbit.period
+    ds = simulate_translating(rig, orbit.parameter, period, sample_rate=64 * orbit.periods / period,
+                              initial_state=orbit.state, rtol=RTOL)
+    angles = (ds["event_time"].values[ds["event_kind"].values == "impact"] * orbit.parameter) % (2.0 * math.pi)
+    joints = np.r_[rig.profile.joints, 2.0 * math.pi]
+    distance = np.abs(angles[:, None] - joints[None, :])
+    i, j = np.unravel_index(int(np.argmin(distance)), distance.shape)
+    return f"impact at cam angle {angles[i]:.6f} rad, {distance[i, j]:.1e} rad from the joint at {joints[j]:.6f} rad"
 
 
 def branches(rig):
@@ -72,10 +88,12 @@ def branches(rig):
                 lines.append(f"no switch at the doubling at {item.parameter / RPM:.3f} rpm: {exc}")
     for index, branch in enumerate(found):
         speeds = [o.parameter / RPM for o in branch.orbits]
-        marks = ", ".join(f"{b.kind} {b.parameter / RPM:.4f} rpm" for b in branch.bifurcations)
+        marks = ", ".join(f"{b.kind} {b.parameter / RPM:.4f} rpm" + (f" ({corner(rig, b.orbit)})"
+                                                                        if b.kind == "multiplier-jump" else "")
+                          for b in branch.bifurcations)
         lines.append(f"branch {index}: period {branch.orbits[0].periods}, {speeds[0]:.4f} to {speeds[-1]:.4f} rpm, "
-                     f"{len(speeds)} orbits, {sum(o.stable for o in branch.orbits)} stable; {branch.stopped}; "
-                     f"{marks or 'no bifurcation'}")
+                     f"{len(speeds)} orbits, {sum(o.stable for o in branch.orbits)} stable; {branch.stopped} "
+                     f"({corner(rig, branch.orbits[-1])}); {marks or 'no bifurcation'}")
     return translating_dataset(problem, found), lines
 
 
@@ -101,9 +119,10 @@ def main() -> None:
     branch_seconds = time.perf_counter() - clock
     print("\n".join(lines))
     plot_poincare_diagram(section, args.out / "translating_bifurcation.png", marks, branches=continued)
-    near = section.sel(speed_rpm=slice(640.0, 760.0))
-    plot_poincare_diagram(near, args.out / "translating_branches.png", None,
-                          branches=continued.isel(point=np.flatnonzero(continued["speed_rpm"].values >= 600.0)))
+    for name, low, high, step, transient, revolutions in WINDOWS:
+        near = poincare_section(rig, np.arange(low, high + 0.5 * step, step), transient, revolutions, RTOL)
+        inside = (continued["speed_rpm"].values >= low - 5.0) & (continued["speed_rpm"].values <= high + 5.0)
+        plot_poincare_diagram(near, args.out / name, None, branches=continued.isel(point=np.flatnonzero(inside)))
     if args.section is not None:
         save_netcdf(section, args.section)
     stopped = [f"{s:g}" for s, status in zip(speeds, section["status"].values) if status != "ok"]
@@ -114,7 +133,8 @@ def main() -> None:
                    "liftoff_rpm": round(liftoff, 4), "seconds": round(seconds, 1), "stopped": stopped,
                    "fallback_revolutions": fallback, "branches": lines, "branch_seconds": round(branch_seconds, 1)}
         args.data.write_text(json.dumps({"translating_bifurcation.png": numbers,
-                                         "translating_branches.png": {"branches": lines}}, indent=1) + "\n")
+                                         **{name: {"window_rpm": [low, high, step]} for name, low, high, step, _, _ in
+                                            WINDOWS}}, indent=1) + "\n")
     print(f"{speeds.size} speeds, {args.transient} + {args.revolutions} revolutions each, rtol {RTOL:g}: "
           f"{seconds:.0f} s; speeds stopped: {', '.join(stopped) or 'none'}; revolutions run at a fallback "
           f"tolerance: {fallback}")

@@ -69,6 +69,7 @@ SOURCES = {
     "flexible_pivot_resonance.png": "python examples/flexible_pivot.py",
     "translating_bifurcation.png": "python examples/translating_bifurcation.py",
     "translating_branches.png": "python examples/translating_bifurcation.py",
+    "translating_branches_358.png": "python examples/translating_bifurcation.py",
     "friction_errors.png": "python examples/friction_error_tables.py",
     "impact_hysteresis.png": "python examples/impact_damping_tables.py",
     "impact_residue_landscape.png": "python examples/impact_damping_tables.py",
@@ -220,7 +221,8 @@ SLOW = {"friction_tables": _script("friction_error_tables.py", ("friction_errors
         "gallery": _script("chapter2_gallery.py", tuple(k for k, v in SOURCES.items() if v.endswith("gallery.py")),
                            ("2.4", "2.7", "2.10", "2.14", "2.16"), data=True),
         "translating": _script("translating_bifurcation.py", ("translating_bifurcation.png",
-                                                                    "translating_branches.png"), data=True)}
+                                                                    "translating_branches.png",
+                                                                    "translating_branches_358.png"), data=True)}
 
 
 def sha256(path: Path) -> str:

@@ -177,7 +177,8 @@ def translating_dataset(problem: Problem, branches: list[Branch]) -> xr.Dataset:
         "multiplier_real": (("point", "multiplier"), mu.real, {"units": "1", "long_name": "Floquet multiplier, real"}),
         "multiplier_imag": (("point", "multiplier"), mu.imag, {"units": "1", "long_name": "Floquet multiplier, imag"}),
         "bifurcation_kind": ("bifurcation", np.array([b.kind for _, b in found], dtype=str),
-                             {"units": "1", "long_name": "fold, period-doubling, neimark-sacker or grazing"}),
+                             {"units": "1", "long_name": "fold, period-doubling, neimark-sacker, grazing or "
+                                                          "multiplier-jump"}),
         "bifurcation_parameter": ("bifurcation", np.array([b.parameter for _, b in found], dtype=float),
                                   {"units": "rad/s", "long_name": "cam speed at the bifurcation"}),
         "bifurcation_branch": ("bifurcation", np.array([i for i, _ in found], dtype=np.int32),

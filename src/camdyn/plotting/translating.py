@@ -15,25 +15,27 @@ from camdyn.plotting.style import axis_label, save_figure, styled, tidy_axis
 __all__ = ["plot_translating_history", "plot_poincare_diagram"]
 
 #: marker of each bifurcation kind
-_MARKERS = {"fold": "s", "period-doubling": "o", "neimark-sacker": "D", "grazing": "^"}
+_MARKERS = {"fold": "s", "period-doubling": "o", "neimark-sacker": "D", "grazing": "^", "multiplier-jump": "x"}
 
 
 def _draw_branches(ax, ds: xr.Dataset, name: str, scale: float) -> None:
-    """Each branch's section points ``name`` (times ``scale``) against the speed [rpm]:
-    runs of stable orbits solid, of unstable ones dashed, each run overlapping the next
-    by one orbit."""
+    """Each branch's section points ``name`` (times ``scale``) against the speed [rpm],
+    coloured by the orbit's period: runs of stable orbits solid, of unstable ones dashed,
+    each run overlapping the next by one orbit."""
+    periods = sorted(int(k) for k in np.unique(ds["periods"].values))
     for index in np.unique(ds["branch"].values).astype(int):
         on = ds["branch"].values == index
         rpm = ds["speed_rpm"].values[on]
         stable = ds["stable"].values[on].astype(bool)
+        period = int(ds["periods"].values[on][0])
         values = ds[name].values[on] * scale
         edges = [0, *(np.flatnonzero(np.diff(stable.astype(int))) + 1), stable.size]
         for a, b in zip(edges[:-1], edges[1:]):
             part = slice(max(a - 1, 0), b)
             style = "-" if stable[b - 1] else "--"
-            for j in range(values.shape[1]):
-                ax.plot(rpm[part], values[part, j], style, color=f"C{index % 10}", lw=1.2, zorder=3,
-                        label=f"branch {index}, {'stable' if stable[b - 1] else 'unstable'}" if j == 0 else None)
+            for j in range(period):
+                ax.plot(rpm[part], values[part, j], style, color=f"C{periods.index(period) % 10}", lw=1.2, zorder=3,
+                        label=f"period {period}, {'stable' if stable[b - 1] else 'unstable'}" if j == 0 else None)
 
 
 def _mark_bifurcations(axes, ds: xr.Dataset) -> None:
