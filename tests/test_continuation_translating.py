@@ -185,4 +185,7 @@ def test_the_cli_continues_the_alzate_rig(tmp_path):
     assert doc["bifurcations"][0]["kind"] == "period-doubling" and doc["bifurcations"][0]["branch"] == 0
     assert doc["summary"]["branch_count"] == 2
     assert 735.0 < doc["bifurcations"][0]["speed_rpm"] < 742.0
+    single, double = doc["branches"]
+    assert all(o["periods"] == 1 and len(o["poincare"]) == 1 for o in single)
+    assert all(o["periods"] == 2 and len(o["poincare"]) == 2 for o in double)
     assert out.stat().st_size > 0 and plot.stat().st_size > 0

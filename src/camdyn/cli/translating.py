@@ -193,7 +193,7 @@ def continue_translating_command(source: str, assignments, parameter: str, start
         summary = {"parameter": SPEED_KEY, "units": "rad/s", "points": len(branch.orbits),
                    "stable_points": sum(o.stable for o in branch.orbits), "bifurcation_count": len(found),
                    "stopped": branch.stopped, "branch_count": len(branches)}
-        emit_json("continue", summary, bifurcations=found, files=files)
+        emit_json("continue", summary, branches=_orbit_records(ds, len(branches)), bifurcations=found, files=files)
         return
     for index, item in enumerate(branches):
         rpm = [o.parameter / RPM for o in item.orbits]
@@ -203,3 +203,22 @@ def continue_translating_command(source: str, assignments, parameter: str, start
     for item in found:
         console.print(f"  {item['kind']} at {SPEED_KEY} = {item['speed_rpm']:.9g} rpm (branch {item['branch']})",
                       highlight=False, soft_wrap=True)
+
+
+def _orbit_records(ds, count: int) -> list[list[dict]]:
+    """Per branch, per orbit of a translating follower's branches dataset: ``parameter``
+    [rad/s], ``speed_rpm``, ``stable``, ``multipliers`` (``[re, im]`` pairs), ``periods``,
+    ``impacts_per_period``, ``state`` (``[x [m], x_dot [m/s]]`` at cam angle 0) and
+    ``poincare`` (x [m] once per revolution of the orbit)."""
+    records = [[] for _ in range(count)]
+    for i in range(ds.sizes["point"]):
+        k = int(ds["periods"].values[i])
+        records[int(ds["branch"].values[i])].append({
+            "parameter": float(ds["parameter"].values[i]), "speed_rpm": float(ds["speed_rpm"].values[i]),
+            "stable": bool(ds["stable"].values[i]),
+            "multipliers": [[float(a), float(b)] for a, b in zip(ds["multiplier_real"].values[i],
+                                                                  ds["multiplier_imag"].values[i])],
+            "periods": k, "impacts_per_period": int(ds["impacts_per_period"].values[i]),
+            "state": [float(ds["poincare_x"].values[i, 0]), float(ds["poincare_x_dot"].values[i, 0])],
+            "poincare": [float(v) for v in ds["poincare_x"].values[i, :k]]})
+    return records
