@@ -107,6 +107,24 @@ def test_the_multipliers_product_is_the_restitution_squared(rig, orbit700):
     assert np.allclose(np.abs(orbit700.multipliers), rig.restitution, atol=1e-8)
 
 
+def test_an_orbit_captured_by_the_cam_has_zero_multipliers(rig):
+    """At 170 rpm, the follower leaves the cam, lands in an accumulation of some 70
+    impacts and is captured into sustained contact until it leaves again: after the
+    capture its state is the cam's whatever it was before, so the capture's and the
+    lift-off's saltation matrices vanish and both multipliers are 0. One revolution of
+    the simulator from two different starts (resting on the cam; 0.2 m above it, at
+    rest) that both end in a capture lands on the orbit's state."""
+    omega, phase = 170.0 * RPM, 2.9                                          # [rad/s], [rad]: in flight
+    orbit = find_orbit(translating_problem(rig, omega, phase=phase), transient=5)
+    assert np.array_equal(orbit.multipliers, np.zeros(2)) and orbit.impacts_per_period > 50
+    period = 2.0 * math.pi / omega
+    for start in (None, (0.2, 0.0)):
+        ds = simulate_translating(rig, omega, period, sample_rate=8.0 / period, phase=phase, initial_state=start)
+        assert (ds["event_kind"].values == "capture").sum() == 1
+        end = np.array([ds["x"].values[-1], ds["x_dot"].values[-1]])
+        assert np.allclose(end, orbit.state, rtol=1e-6, atol=0.0)
+
+
 def _period(states, longest=4):
     """The smallest number of revolutions ``k <= longest`` after which the last states
     repeat (to 1e-6 of their size), or None."""
