@@ -18,9 +18,13 @@ through its events:
 - the compliant law's contact onset and end: a switch of the field, no reset.
 
 An orbit whose impacts accumulate (an infinite sequence of ever smaller impacts ending in
-a capture, as the rig's at and below about 358 rpm) is integrated up to the capture
-velocity's cut, where the event count is large and the monodromy ill-conditioned:
-continuation there is not reliable (docs/continuation.md, Limits).
+a capture, as the rig's between lift-off and about 300 rpm) is integrated up to the
+capture velocity's cut and found with both multipliers 0; along its branch the number of
+impacts before the capture changes every few tenths of an rpm, and each change is
+reported as a grazing. An orbit in rigid sustained contact at the section's phase has no
+well-posed problem: the contact mode keeps any offset of the state from the cam, so its
+monodromy is the identity; put the section where the follower flies (docs/continuation.md,
+Limits).
 """
 
 from __future__ import annotations
