@@ -19,6 +19,7 @@ from camdyn.continuation.orbits import find_orbit
 from camdyn.continuation.switching import switch_branch
 from camdyn.continuation.translating import RPM, trace_translating, translating_dataset, translating_problem
 from camdyn.errors import ParameterError
+from camdyn.model.translating_follower import penalty_damping
 from camdyn.simulation.translating import alzate_rig, simulate_translating
 
 DATA = json.loads((Path(__file__).parent / "data" / "siconos_camfollower.json").read_text())
@@ -74,10 +75,22 @@ def test_the_700_rpm_impact_velocity_agrees_with_siconos(rig, orbit700):
     assert accuracy < 0.01 * abs(impacts[0])                               # the comparison is not empty
 
 
-def test_the_monodromy_matches_differences_of_perturbed_simulations(rig, orbit700):
+def _compliant_rig():
+    """The rig with the compliant law, its penalty matched to e = 0.8 (kc = 1e7 N/m)."""
+    stiffness = 1e7
+    return alzate_rig("compliant", stiffness, penalty_damping(0.8, stiffness, 1.221))
+
+
+@pytest.mark.parametrize("law", ["rigid", "compliant"])
+def test_the_monodromy_matches_differences_of_perturbed_simulations(rig, orbit700, law):
     """The saltation-corrected monodromy matrix equals central differences of one-revolution
     simulations from perturbed states (camdyn's simulator, automatic method, its own
-    events), and its multipliers those of the differenced matrix, to 1e-5."""
+    events), and its multipliers those of the differenced matrix, to 1e-5; for the rigid
+    law (impact resets) and for the compliant one (a penalty switched on and off)."""
+    if law == "compliant":
+        rig = _compliant_rig()
+        orbit700 = find_orbit(translating_problem(rig, 700.0 * RPM), transient=100)
+        assert orbit700.impacts_per_period == 1 and orbit700.stable
     omega = 700.0 * RPM
     period = 2.0 * math.pi / omega
     columns = []
