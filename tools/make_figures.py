@@ -70,6 +70,8 @@ SOURCES = {
     "continuation_curves.png": "camdyn map sundar2014-impact --x cam.runout=1.5mm:3.5mm:9 "
                                "--y speed=14Hz:17.5Hz:15 --curve period-doubling=16.99Hz",
     "translating_bifurcation.png": "python examples/translating_bifurcation.py",
+    "translating_branches.png": "python examples/translating_bifurcation.py",
+    "translating_branches_358.png": "python examples/translating_bifurcation.py",
     "friction_errors.png": "python examples/friction_error_tables.py",
     "impact_hysteresis.png": "python examples/impact_damping_tables.py",
     "impact_residue_landscape.png": "python examples/impact_damping_tables.py",
@@ -241,7 +243,9 @@ SLOW = {"friction_tables": _script("friction_error_tables.py", ("friction_errors
                                  ("impact_hysteresis.png", "impact_residue_landscape.png", "restitution_fit.png")),
         "gallery": _script("chapter2_gallery.py", tuple(k for k, v in SOURCES.items() if v.endswith("gallery.py")),
                            ("2.4", "2.7", "2.10", "2.14", "2.16"), data=True),
-        "translating": _script("translating_bifurcation.py", ("translating_bifurcation.png",), data=True)}
+        "translating": _script("translating_bifurcation.py", ("translating_bifurcation.png",
+                                                                    "translating_branches.png",
+                                                                    "translating_branches_358.png"), data=True)}
 
 
 def sha256(path: Path) -> str:

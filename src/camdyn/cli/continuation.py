@@ -51,11 +51,19 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     """Continue periodic orbits over a parameter range: stability from the Floquet
     multipliers; folds, period doublings, Neimark-Sacker bifurcations, grazing, loss of
     contact and sliding reversal located on the way; the period-doubled branches
-    followed (docs/continuation.md)."""
+    followed (docs/continuation.md). A translating follower (the preset alzate) is
+    continued in motion.speed, its orbits taken at cam angle 0."""
     from camdyn.continuation.problem import parameter_unit
     from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset, switch_doublings
 
     check_outputs(netcdf=out, figure=plot, force=force)
+    from camdyn.params.profiles import is_translating
+
+    if is_translating(source):
+        from camdyn.cli.translating import continue_translating_command
+        continue_translating_command(source, set_, parameter, start, stop, period, step, max_points, transient,
+                                     doublings, brute_force, plot, out, quiet, json_)
+        return
     system = load_source(source, set_)
     unit = parameter_unit(system, parameter)
     first, last = _value(start, "--from", unit), _value(stop, "--to", unit)

@@ -15,7 +15,8 @@ from camdyn.errors import ParameterError
 from camdyn.params.config import parse_assignments
 from camdyn.params.units import parse_quantity, parse_speed
 
-__all__ = ["simulate_translating_command", "bifurcation_translating_command", "translating_summary"]
+__all__ = ["simulate_translating_command", "bifurcation_translating_command", "continue_translating_command",
+           "translating_summary"]
 
 #: The tolerance of a translating follower's run when --rtol is not given [-].
 DEFAULT_RTOL = 1e-10
@@ -140,3 +141,84 @@ def bifurcation_translating_command(source: str, assignments, speeds: str, revol
         console.print(f"{rpm.size} speeds, {discard} + {revolutions - discard} revolutions each: "
                       f"{section.attrs['total_elapsed_s']:.1f} s; speeds whose runs stopped: {stopped}",
                       markup=False, highlight=False)
+
+
+def continue_translating_command(source: str, assignments, parameter: str, start: str, stop: str, period: int,
+                                 step: float, max_points: int, transient: int, doublings: int, brute_force: int,
+                                 plot: Path | None, out: Path | None, quiet: bool, json_out: bool) -> None:
+    """Run ``camdyn continue`` on a translating follower: its branch of periodic orbits in
+    the cam speed, the orbits' state at cam angle 0 (the section of ``camdyn
+    bifurcation``), the period-doubled branches born on it, and with ``--brute-force N``
+    the Poincaré section at N speeds under the branches of ``--plot`` (the outputs are
+    checked already)."""
+    from camdyn.continuation.branches import MIN_STEP
+    from camdyn.continuation.results import switch_doublings
+    from camdyn.continuation.translating import RPM, SPEED_KEY, trace_translating, translating_dataset
+    from camdyn.io.lift_table import load_translating
+
+    if parameter != SPEED_KEY:
+        raise ParameterError(f"--parameter {parameter}: a translating follower is continued in {SPEED_KEY} only")
+    first, last = 2.0 * math.pi * parse_speed(start, "--from"), 2.0 * math.pi * parse_speed(stop, "--to")
+    if not (first > 0 and last > 0 and math.isfinite(first) and math.isfinite(last)) or first == last:
+        raise ParameterError(f"--from and --to must be two different positive cam speeds, got {start} and {stop}")
+    if period < 1 or max_points < 2 or transient < 1 or not step >= MIN_STEP:
+        raise ParameterError(f"--period and --transient must be at least 1, --max-points at least 2, --step at "
+                             f"least {MIN_STEP:g}")
+    if doublings < 0 or brute_force < 0 or brute_force == 1:
+        raise ParameterError("--doublings must be at least 0, --brute-force 0 or at least 2")
+    if brute_force and plot is None:
+        raise ParameterError("--brute-force draws the diagram under the branches of --plot: give --plot")
+    follower, spec = load_translating(source, parse_assignments(assignments))
+    problem, branch = trace_translating(follower, first, last, period, step=step, max_points=max_points,
+                                        transient=transient)
+    branches = [branch, *switch_doublings(problem, branch, last, doublings, step, max_points)]
+    ds = translating_dataset(problem, branches)
+    ds.attrs["name"] = spec.name
+    files = []
+    if out is not None:
+        from camdyn.io.netcdf import save_netcdf
+        files.append(announce(save_netcdf(ds, out), json_out))
+    if plot is not None:
+        from camdyn.plotting.translating import plot_poincare_diagram
+        section = None
+        if brute_force:
+            from camdyn.analysis.poincare import poincare_section
+            section = poincare_section(follower, np.linspace(first, last, brute_force) / RPM, transient=200,
+                                       revolutions=40)
+        files.append(announce(plot_poincare_diagram(section, plot, None, branches=ds), json_out))
+    found = [{"kind": str(k), "parameter": float(v), "speed_rpm": float(v) / RPM, "branch": int(b)}
+             for k, v, b in zip(ds["bifurcation_kind"].values, ds["bifurcation_parameter"].values,
+                                ds["bifurcation_branch"].values)]
+    if json_out:
+        summary = {"parameter": SPEED_KEY, "units": "rad/s", "points": len(branch.orbits),
+                   "stable_points": sum(o.stable for o in branch.orbits), "bifurcation_count": len(found),
+                   "stopped": branch.stopped, "branch_count": len(branches)}
+        emit_json("continue", summary, branches=_orbit_records(ds, len(branches)), bifurcations=found, files=files)
+        return
+    for index, item in enumerate(branches):
+        rpm = [o.parameter / RPM for o in item.orbits]
+        console.print(f"{len(rpm)} orbits of period {item.orbits[0].periods} over {SPEED_KEY} = {rpm[0]:.6g} to "
+                      f"{rpm[-1]:.6g} rpm, {sum(o.stable for o in item.orbits)} stable; {item.stopped}"
+                      + ("" if index == 0 else f" (branch {index})"), highlight=False, soft_wrap=True)
+    for item in found:
+        console.print(f"  {item['kind']} at {SPEED_KEY} = {item['speed_rpm']:.9g} rpm (branch {item['branch']})",
+                      highlight=False, soft_wrap=True)
+
+
+def _orbit_records(ds, count: int) -> list[list[dict]]:
+    """Per branch, per orbit of a translating follower's branches dataset: ``parameter``
+    [rad/s], ``speed_rpm``, ``stable``, ``multipliers`` (``[re, im]`` pairs), ``periods``,
+    ``impacts_per_period``, ``state`` (``[x [m], x_dot [m/s]]`` at cam angle 0) and
+    ``poincare`` (x [m] once per revolution of the orbit)."""
+    records = [[] for _ in range(count)]
+    for i in range(ds.sizes["point"]):
+        k = int(ds["periods"].values[i])
+        records[int(ds["branch"].values[i])].append({
+            "parameter": float(ds["parameter"].values[i]), "speed_rpm": float(ds["speed_rpm"].values[i]),
+            "stable": bool(ds["stable"].values[i]),
+            "multipliers": [[float(a), float(b)] for a, b in zip(ds["multiplier_real"].values[i],
+                                                                  ds["multiplier_imag"].values[i])],
+            "periods": k, "impacts_per_period": int(ds["impacts_per_period"].values[i]),
+            "state": [float(ds["poincare_x"].values[i, 0]), float(ds["poincare_x_dot"].values[i, 0])],
+            "poincare": [float(v) for v in ds["poincare_x"].values[i, :k]]})
+    return records

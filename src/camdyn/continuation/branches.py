@@ -16,7 +16,10 @@ Test functions, evaluated at every point; a sign change between two points is lo
 by the secant method (Illinois variant) along the arclength (Seydel 2010, sec. 5.3):
 
 * fold: the parameter component of the tangent;
-* period doubling: ``det(M + I)`` (a real multiplier crosses -1);
+* period doubling: ``det(M + I)`` (a real multiplier crosses -1); a sign change where
+  the monodromy matrix jumps, with no multiplier near -1 at the located point, is
+  reported as a multiplier jump (a discontinuity-induced bifurcation: Di Bernardo et al.
+  2008, ch. 8; on a cam of circular arcs, an impact crossing a joint of the profile);
 * Neimark-Sacker: ``prod_{i<j} (mu_i mu_j - 1)`` (a complex pair crosses the unit
   circle; a real pair with product 1, a neutral saddle, is discarded after location);
 * grazing: the number of impacts per period changes (located by bisection, as the
@@ -44,11 +47,18 @@ from camdyn.errors import ParameterError, SimulationError
 MIN_STEP = 1e-6
 #: Below this |det([J; t])| (scaled units) the tangent is oriented along the previous one.
 ORIENTATION_FLOOR = 1e-12
+#: A located period doubling needs a multiplier within this of -1 [-]: where the sign of
+#: ``det(M + I)`` changes because the monodromy matrix jumps (a translating follower's
+#: impact crossing a joint of its cam profile, where the cam's acceleration jumps: a
+#: corner-impact bifurcation) the secant converges onto the jump with no multiplier near
+#: -1, and the point is reported as a ``multiplier-jump``.
+JUMP_TOLERANCE = 0.1
 
 __all__ = ["Bifurcation", "Branch", "continue_orbits", "continuation_scales", "KINDS"]
 
 #: The bifurcations detected, as named in results.
-KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing", "contact-loss", "sliding-reversal")
+KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing", "contact-loss", "sliding-reversal",
+         "multiplier-jump")
 #: The kinds located by the sign change of a smooth test function.
 _SMOOTH = ("fold", "period-doubling", "neimark-sacker", "contact-loss", "sliding-reversal")
 
@@ -246,10 +256,9 @@ def _locate(job: _Continuation, a: _Point, b: _Point, kind: str, max_iterations:
             if side == 1 and kind != "grazing":
                 f_lo *= 0.5
             side = 1
-    if kind == "neimark-sacker":
-        mu = best.orbit.multipliers
-        if not np.any(np.abs(mu.imag) > 1e-8 * np.abs(mu)):
-            return None                                               # a neutral saddle
+    mu = best.orbit.multipliers
+    if kind == "neimark-sacker" and not np.any(np.abs(mu.imag) > 1e-8 * np.abs(mu)):
+        return None                                                   # a neutral saddle
     return best
 
 
@@ -259,8 +268,11 @@ def _detect(job: _Continuation, a: _Point, b: _Point) -> list[Bifurcation]:
     for kind in _SMOOTH:
         if before[kind] * after[kind] < 0:                       # False for NaN (a test model)
             point = _locate(job, a, b, kind)
-            if point is not None:
-                found.append(Bifurcation(kind, point.orbit.parameter, point.orbit))
+            if point is None:
+                continue
+            if kind == "period-doubling" and not np.min(np.abs(point.orbit.multipliers + 1.0)) < JUMP_TOLERANCE:
+                kind = "multiplier-jump"        # det(M + I) jumped across zero: M is discontinuous there
+            found.append(Bifurcation(kind, point.orbit.parameter, point.orbit))
     if a.orbit.impacts_per_period != b.orbit.impacts_per_period:
         point = _locate(job, a, b, "grazing")
         if point is not None:

@@ -183,7 +183,7 @@ def branches_dataset(problem: Problem, records: list[list[dict]], bifurcations: 
                             {"units": "1", "long_name": "Floquet multiplier, imaginary part"}),
         "bifurcation_kind": ("bifurcation", np.array([b["kind"] for b in bifurcations], dtype=str),
                              {"units": "1", "long_name": "fold, period-doubling, neimark-sacker, grazing, "
-                                                          "contact-loss or sliding-reversal"}),
+                                                          "contact-loss, sliding-reversal or multiplier-jump"}),
         "bifurcation_parameter": ("bifurcation", np.array([b["parameter"] for b in bifurcations], dtype=float),
                                   {"units": unit, "long_name": f"{problem.name} at the bifurcation"}),
         "bifurcation_branch": ("bifurcation", np.array([b["branch"] for b in bifurcations], dtype=np.int32),

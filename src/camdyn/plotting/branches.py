@@ -17,7 +17,7 @@ __all__ = ["plot_branches"]
 
 #: marker of each bifurcation kind
 _MARKERS = {"fold": "s", "period-doubling": "o", "neimark-sacker": "D", "grazing": "^", "contact-loss": "v",
-            "sliding-reversal": "P"}
+            "sliding-reversal": "P", "multiplier-jump": "x"}
 
 
 def _runs(stable: np.ndarray) -> list[slice]:

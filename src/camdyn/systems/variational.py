@@ -5,7 +5,7 @@ saltation matrix applied at every event.
 For a model of ``n`` states the variational system has ``n + n^2`` states: the model's
 ``y``, then ``Phi`` (row-major, ``Phi[i, j] = Y[n + i n + j]``) with ``Phi' = J(t, y) Phi``
 between events. At an event of guard ``g`` (before: mode ``-``; after: mode ``+``, with the
-reset ``y+ = R(y-)``) the matrix jumps by the saltation matrix (Aizerman and Gantmacher
+reset ``y+ = R(y-, t)``) the matrix jumps by the saltation matrix (Aizerman and Gantmacher
 1958; Leine and Nijmeijer 2004, doi:10.1007/978-3-540-44398-8)::
 
     S = R_y + (f+ - R_y f- - R_t) grad(g)^T / (dg/dt)-,      Phi+ = S Phi-          (1)
