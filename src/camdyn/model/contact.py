@@ -25,8 +25,8 @@ from camdyn.model import layout as L
 from camdyn.params.laws import FIRST_RESTITUTION_CODE, LAWS, lookup
 
 __all__ = [
-    "effective_modulus", "stiffness_at", "damped_force", "hertz_point_coefficient", "hertz_line_coefficient", "equivalent_radius",
-    "restitution_factor", "hunt_crossley_beta", "contact_force",
+    "effective_modulus", "stiffness_at", "damped_force", "hertz_point_coefficient", "hertz_line_coefficient",
+    "equivalent_radius", "restitution_factor", "hunt_crossley_beta", "contact_force",
 ]
 
 

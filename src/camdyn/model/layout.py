@@ -104,7 +104,8 @@ _READERS = tuple((slot, parameter_index(System)[key].getter) for slot, key in CO
 
 def effective_modulus(system: System) -> float:
     """Contact modulus ``E*`` [Pa]: ``1/E* = (1-nu_c^2)/Y_c + (1-nu_b^2)/Y_b`` (eq 2.13, 3.12)."""
-    from camdyn.model.contact import effective_modulus as modulus   # contact.py reads this module's slots
+    # imported here: contact.py reads this module's slots
+    from camdyn.model.contact import effective_modulus as modulus
 
     c, f = system.cam, system.follower
     return modulus(c.youngs_modulus, c.poisson_ratio, f.youngs_modulus, f.poisson_ratio)
