@@ -136,7 +136,7 @@ ALZATE_CITATION = (
     "systems', arXiv:0711.1008 (2007)")
 
 
-def alzate_rig(contact="rigid", contact_stiffness=0.0, contact_damping=0.0):
+def alzate_rig(contact="rigid", contact_stiffness=0.0, contact_damping=0.0, hertz=None):
     """The cam-follower rig of Alzate and di Bernardo as the Siconos project's example
     gives it: an in-line knife-edge follower (m = 1.221 kg, k = 1430.8 N/m, e = 0.8) on a
     symmetric cam of circular arcs: the base circle (r = 0.40 m) for half a turn, a flank
@@ -145,7 +145,8 @@ def alzate_rig(contact="rigid", contact_stiffness=0.0, contact_damping=0.0):
     back. The spring is relaxed at 0.30 m from the axis, so its preload on the base circle
     is ``k (0.40 - 0.30) = 143.08 N``; no gravity, no damping. Use the phase pi/2 of the
     source (``simulate_translating(..., phase=math.pi / 2)``) to start where it starts,
-    at the end of the base dwell."""
+    at the end of the base dwell. ``contact="hertz"`` takes the Hertz law's
+    :class:`HertzContact` as ``hertz`` (a rounded tip: ``HertzContact(tip_radius=...)``)."""
     a = ALZATE_ARCS
     quarter = 0.5 * math.pi
     nose_angle = math.pi - math.pi / 9.0   # the nose arc's centre in the cam's frame [rad]
@@ -162,7 +163,7 @@ def alzate_rig(contact="rigid", contact_stiffness=0.0, contact_damping=0.0):
     stiffness = 1430.8
     return TranslatingFollower(profile, mass=1.221, stiffness=stiffness, preload=stiffness * (a["base"] - 0.30),
                                contact=contact, restitution=0.8, contact_stiffness=contact_stiffness,
-                               contact_damping=contact_damping, citation=ALZATE_CITATION)
+                               contact_damping=contact_damping, hertz=hertz, citation=ALZATE_CITATION)
 
 
 def follower_from_spec(spec, lift=None):
