@@ -40,8 +40,9 @@ Two contact laws:
   contact (signed, negative where concave): the pitch curve's for a knife edge, the
   pitch curve's less the roller's radius for a roller (7). The damping ``c`` is one of
   the laws of :mod:`camdyn.model.contact`: none, viscous (``c`` = ``cc``), or a
-  restitution law ``c = chi(e) F_k / (delta v_approach)`` (Hunt and Crossley 1975,
-  doi:10.1115/1.3423596; Lankarani and Nikravesh 1990, doi:10.1115/1.2912617) with
+  restitution law ``c = chi(e) F_k / v_approach``, so ``F_d = chi(e) F_k delta' /
+  v_approach`` (Hunt and Crossley 1975, doi:10.1115/1.3423596; Lankarani and Nikravesh
+  1990, doi:10.1115/1.2912617) with
   ``v_approach`` the approach velocity ``s_dot - x'`` at the contact's onset, kept in the
   mode. The force is left unclipped, as the linear law's. The penetration is measured
   along the follower's line (as for the linear law), so for a knife edge or roller the
