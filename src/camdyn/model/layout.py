@@ -104,8 +104,11 @@ _READERS = tuple((slot, parameter_index(System)[key].getter) for slot, key in CO
 
 def effective_modulus(system: System) -> float:
     """Contact modulus ``E*`` [Pa]: ``1/E* = (1-nu_c^2)/Y_c + (1-nu_b^2)/Y_b`` (eq 2.13, 3.12)."""
+    # imported here: contact.py reads this module's slots
+    from camdyn.model.contact import effective_modulus as modulus
+
     c, f = system.cam, system.follower
-    return 1.0 / ((1 - c.poisson_ratio ** 2) / c.youngs_modulus + (1 - f.poisson_ratio ** 2) / f.youngs_modulus)
+    return modulus(c.youngs_modulus, c.poisson_ratio, f.youngs_modulus, f.poisson_ratio)
 
 
 def pack(system: System, viscous_c: float = 0.0, initial_angle: float | None = None) -> np.ndarray:

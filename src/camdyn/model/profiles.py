@@ -305,14 +305,26 @@ def pitch_curvature_radius(profile, theta):
     theta = np.asarray(theta, dtype=float)
     if profile.follower == "flat":
         return profile.base_radius + s + s2
-    eps = profile.offset
-    big = math.sqrt(profile.prime_radius ** 2 - eps ** 2) + s
+    speed_cubed, cross = curvature_terms(theta, s, s1, s2, profile.prime_radius, profile.offset)
+    return speed_cubed / cross
+
+
+def curvature_terms(theta, s, s1, s2, prime_radius, offset):
+    """The pitch curve's ``|r'|^3`` [m^3] and ``r' x r''`` [m^2] at the cam angles ``theta``
+    [rad] (arrays or numbers), from the lift ``s`` [m] and its derivatives ``s'``, ``s''``
+    [m/rad, m/rad^2]: its radius of curvature is their ratio, its curvature the inverse
+    (the pitch point in the cam's frame as in :func:`pitch_curvature_radius`)."""
+    big = math.sqrt(prime_radius ** 2 - offset ** 2) + s
     c, n = np.cos(theta), np.sin(theta)
-    dx = -eps * n + s1 * n + big * c
-    dy = -eps * c + s1 * c - big * n
-    ddx = -eps * c + s2 * n + 2.0 * s1 * c - big * n
-    ddy = eps * n + s2 * c - 2.0 * s1 * n - big * c
-    return (dx * dx + dy * dy) ** 1.5 / (dy * ddx - dx * ddy)
+    dx = -offset * n + s1 * n + big * c
+    dy = -offset * c + s1 * c - big * n
+    ddx = -offset * c + s2 * n + 2.0 * s1 * c - big * n
+    ddy = offset * n + s2 * c - 2.0 * s1 * n - big * c
+    return (dx * dx + dy * dy) ** 1.5, dy * ddx - dx * ddy
+
+
+#: :func:`curvature_terms` compiled for the compiled models (the same lines).
+pitch_curvature_terms = numba.njit(cache=True)(curvature_terms)
 
 
 def check_profile(profile):

@@ -30,8 +30,27 @@ Two contact laws:
   half-period of the contact oscillator), the relation used to match it to a Newton
   restitution. The force is left unclipped (it pulls briefly before separation), so that
   the relation holds exactly.
+- **Hertz** (law 2): the compliant contact with the Hertz stiffness of the materials and
+  the geometry (:mod:`camdyn.model.contact`; K. L. Johnson, *Contact Mechanics*, 1985),
+  ``N = F_k(delta) + c(delta) delta'``, ``1/E* = (1-nu_c^2)/Y_c + (1-nu_f^2)/Y_f`` (4).
+  Line contact (a flat face, or a cylindrical roller, on a cam of width ``l``):
+  ``F_k = (pi/4) E* l delta`` (5). Point contact (a crowned roller, or a knife edge with a
+  tip radius ``r_f``): ``F_k = (4/3) E* sqrt(rho_e) delta^1.5`` (6) with ``1/rho_e =
+  1/rho_cam + 1/r_f``, ``rho_cam`` the radius of curvature of the cam's surface at the
+  contact (signed, negative where concave): the pitch curve's for a knife edge, the
+  pitch curve's less the roller's radius for a roller (7). The damping ``c`` is one of
+  the laws of :mod:`camdyn.model.contact`: none, viscous (``c`` = ``cc``), or a
+  restitution law ``c = chi(e) F_k / v_approach``, so ``F_d = chi(e) F_k delta' /
+  v_approach`` (Hunt and Crossley 1975, doi:10.1115/1.3423596; Lankarani and Nikravesh
+  1990, doi:10.1115/1.2912617) with
+  ``v_approach`` the approach velocity ``s_dot - x'`` at the contact's onset, kept in the
+  mode. The force is left unclipped, as the linear law's. The penetration is measured
+  along the follower's line (as for the linear law), so for a knife edge or roller the
+  pressure angle is neglected in the contact law; the kinematics of a knife edge stay
+  those of a sharp edge (its tip radius enters the stiffness only).
 
-State ``(x [m], x' [m/s])``; mode ``(contact,)``, 0 in flight, 1 in contact.
+State ``(x [m], x' [m/s])``; mode ``(contact, approach)``: 0 in flight, 1 in contact, and
+the approach velocity [m/s] of the current contact (Hertz law).
 
 Parameter vector ``p``: the slots below, then the profile table from :data:`PROFILE`.
 """
@@ -44,6 +63,7 @@ import numba
 import numpy as np
 
 from camdyn.errors import ParameterError
+from camdyn.model import contact as hertz
 from camdyn.model import profiles
 
 MASS = 0            # m [kg]
@@ -53,17 +73,30 @@ DAMPING = 3         # c [N s/m]
 SPEED = 4           # omega [rad/s]
 PHASE = 5           # theta0 [rad]
 GRAVITY = 6         # g [m/s^2]
-LAW = 7             # 0 rigid, 1 compliant
+LAW = 7             # 0 rigid, 1 compliant (linear), 2 Hertz
 RESTITUTION = 8     # e [-]
 CAPTURE = 9         # capture velocity [m/s]
 CONTACT_STIFFNESS = 10  # kc [N/m]
-CONTACT_DAMPING = 11    # cc [N s/m]
-PROFILE = 12
+CONTACT_DAMPING = 11    # cc [N s/m]; the viscous c of the Hertz law
+CONTACT_KIND = 12   # Hertz: 0 point, 1 line (as camdyn.model.layout)
+MODULUS = 13        # E* [Pa]
+WIDTH = 14          # l [m] of line contact
+FOLLOWER_RADIUS = 15    # r_f [m] of point contact: the roller's or the knife edge's tip radius
+DAMPING_LAW = 16    # code of the damping law (camdyn.params.laws.TABLE)
+V_REFERENCE = 17    # smallest approach velocity of the restitution laws [m/s]
+FACE = 18           # 0 flat, 1 knife, 2 roller
+PRIME_RADIUS = 19   # r_base + r_r [m]
+OFFSET = 20         # epsilon [m]
+ROLLER_RADIUS = 21  # r_r [m]
+PROFILE = 22
 RIGID = 0.0
 COMPLIANT = 1.0
+HERTZ = 2.0
+FACES = {"flat": 0.0, "knife": 1.0, "roller": 2.0}
+ROLLER_FACE = 2.0
 STATE_SIZE = 2
 GUARD_COUNT = 2
-MODE_SIZE = 1
+MODE_SIZE = 2
 
 
 @numba.njit(cache=True)
@@ -93,14 +126,47 @@ def spring_force(x, v, p):
 
 
 @numba.njit(cache=True)
+def equivalent_curvature(theta, p):
+    """``1/rho_e`` [1/m] of point contact at the cam angle ``theta`` [rad]: ``kappa_cam +
+    1/r_f`` (eq. 7), the cam surface's curvature ``kappa_cam`` [1/m] from the pitch curve's
+    ``kappa_p`` (a roller's surface is the pitch curve's inner offset by ``r_r``:
+    ``kappa_cam = kappa_p / (1 - r_r kappa_p)``)."""
+    s, s1, s2, _ = profiles.evaluate(p, PROFILE, theta)
+    speed_cubed, cross = profiles.pitch_curvature_terms(theta, s, s1, s2, p[PRIME_RADIUS], p[OFFSET])
+    kappa = cross / speed_cubed
+    if p[FACE] == ROLLER_FACE:
+        kappa = kappa / (1.0 - p[ROLLER_RADIUS] * kappa)
+    return kappa + 1.0 / p[FOLLOWER_RADIUS]
+
+
+@numba.njit(cache=True)
+def equivalent_radius(theta, p):
+    """``rho_e`` [m] of point contact at the cam angle ``theta`` [rad] (eq. 7)."""
+    return 1.0 / equivalent_curvature(theta, p)
+
+
+@numba.njit(cache=True)
+def hertz_force(theta, delta, rate, approach, p):
+    """The Hertz law's force N [N] (eqs. 4-7) at the penetration ``delta`` [m], its rate
+    [m/s], the cam angle ``theta`` [rad] and the contact's approach velocity [m/s]."""
+    line = p[CONTACT_KIND] != 0.0
+    rho_e = 0.0 if line else equivalent_radius(theta, p)
+    kd = hertz.stiffness_at(line, p[MODULUS], rho_e, p[WIDTH], delta)
+    return hertz.damped_force(delta, rate, kd, approach, int(p[DAMPING_LAW]), p[CONTACT_DAMPING], 0.0, 0.0,
+                              p[RESTITUTION], p[V_REFERENCE], False)[0]
+
+
+@numba.njit(cache=True)
 def contact_force(t, y, mode, p):
     """The cam's force on the follower N [N]: eq. (3) in rigid contact, the penalty in
-    compliant contact, 0 in flight."""
+    compliant contact (linear, or Hertz eqs. 4-7), 0 in flight."""
     if mode[0] < 0.5:
         return 0.0
-    _, s, sd, sdd, _ = cam(t, p)
+    theta, s, sd, sdd, _ = cam(t, p)
     if p[LAW] == RIGID:
         return p[MASS] * sdd + spring_force(s, sd, p)
+    if p[LAW] == HERTZ:
+        return hertz_force(theta, s - y[0], sd - y[1], mode[1], p)
     return p[CONTACT_STIFFNESS] * (s - y[0]) + p[CONTACT_DAMPING] * (sd - y[1])
 
 
@@ -133,9 +199,22 @@ def jacobian(t, y, mode, p, jac):
     jac[0, 1] = 1.0
     jac[1, 0] = -p[STIFFNESS] / m
     jac[1, 1] = -p[DAMPING] / m
-    if mode[0] > 0.5:
+    if mode[0] < 0.5:
+        return
+    if p[LAW] == COMPLIANT:
         jac[1, 0] -= p[CONTACT_STIFFNESS] / m
         jac[1, 1] -= p[CONTACT_DAMPING] / m
+        return
+    # the Hertz law by central differences in delta and its rate (N grows with both)
+    theta, s, sd, _, _ = cam(t, p)
+    delta = s - y[0]
+    rate = sd - y[1]
+    d = 1e-6 * max(abs(delta), 1e-12)
+    v = 1e-6 * max(abs(rate), 1e-9)
+    dn_delta = (hertz_force(theta, delta + d, rate, mode[1], p) - hertz_force(theta, delta - d, rate, mode[1], p))
+    dn_rate = (hertz_force(theta, delta, rate + v, mode[1], p) - hertz_force(theta, delta, rate - v, mode[1], p))
+    jac[1, 0] -= dn_delta / (2.0 * d) / m
+    jac[1, 1] -= dn_rate / (2.0 * v) / m
 
 
 @numba.njit(cache=True)
@@ -157,15 +236,16 @@ def expected_sign(k, mode, p):
     if k == 0:
         if not contact:
             return 1.0
-        return -1.0 if p[LAW] == COMPLIANT else 0.0
+        return -1.0 if p[LAW] != RIGID else 0.0
     return 1.0 if contact and p[LAW] == RIGID else 0.0
 
 
 @numba.njit(cache=True)
 def transition(k, t, y, mode, p):
     """The mode after guard ``k`` crossed at ``t`` [s], and the reset of the state."""
-    if p[LAW] == COMPLIANT:
+    if p[LAW] != RIGID:   # a penalty law: contact onset (with its approach velocity) or end
         mode[0] = 1.0 - mode[0]
+        mode[1] = cam(t, p)[2] - y[1] if mode[0] > 0.5 else 0.0
         return
     _, s, sd, sdd, _ = cam(t, p)
     if k == 1:   # the contact force fell to zero: separation, from the cam's state
@@ -190,7 +270,8 @@ def initial_mode(t, y, p, mode):
     _, s, sd, sdd, _ = cam(t, p)
     gap = y[0] - s
     mode[0] = 0.0
-    if p[LAW] == COMPLIANT:
+    mode[1] = 0.0   # no approach under way: the restitution laws use the reference velocity
+    if p[LAW] != RIGID:
         if gap < 0.0:
             mode[0] = 1.0
     elif gap <= 0.0 and p[MASS] * sdd + spring_force(s, sd, p) > 0.0:
@@ -198,12 +279,19 @@ def initial_mode(t, y, p, mode):
 
 
 def pack(profile, mass, stiffness, preload, speed, damping=0.0, phase=0.0, gravity=0.0, law=RIGID,
-         restitution=0.0, capture=0.0, contact_stiffness=0.0, contact_damping=0.0):
-    """The parameter vector ``p`` (slots above, units there) with the profile's table."""
+         restitution=0.0, capture=0.0, contact_stiffness=0.0, contact_damping=0.0, hertz_law=None):
+    """The parameter vector ``p`` (slots above, units there) with the profile's table.
+
+    ``hertz_law`` is a dict of the Hertz law's slots (``CONTACT_KIND``, ``MODULUS``,
+    ``WIDTH``, ``FOLLOWER_RADIUS``, ``DAMPING_LAW``, ``V_REFERENCE``: slot -> value), for law 2."""
     head = np.zeros(PROFILE)
     head[[MASS, STIFFNESS, PRELOAD, DAMPING, SPEED, PHASE, GRAVITY, LAW, RESTITUTION, CAPTURE,
           CONTACT_STIFFNESS, CONTACT_DAMPING]] = (mass, stiffness, preload, damping, speed, phase, gravity, law,
                                                   restitution, capture, contact_stiffness, contact_damping)
+    head[[FACE, PRIME_RADIUS, OFFSET, ROLLER_RADIUS]] = (FACES[profile.follower], profile.prime_radius,
+                                                         profile.offset, profile.roller_radius)
+    for slot, value in (hertz_law or {}).items():
+        head[slot] = value
     return np.concatenate([head, profile.table])
 
 

@@ -46,14 +46,22 @@ from pathlib import Path
 from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyError
 from camdyn.params.units import parse_quantity, parse_speed, registry
 
-__all__ = ["SCHEMA", "SEGMENT_KEYS", "ARC_KEYS", "PROFILE_KINDS", "FACES", "CONTACT_LAWS", "TranslatingSpec",
+__all__ = ["SCHEMA", "SEGMENT_KEYS", "ARC_KEYS", "PROFILE_KINDS", "FACES", "CONTACT_LAWS", "HERTZ_DAMPING_LAWS",
+           "HERTZ_KEYS", "TranslatingSpec",
            "read_translating", "spec_from_table", "is_translating", "declared_kind", "list_translating_presets",
            "translating_preset_text"]
 
 #: The follower kind that selects this schema in ``[follower] kind``.
 TRANSLATING = "translating"
 FACES = ("flat", "knife", "roller")
-CONTACT_LAWS = ("rigid", "compliant")
+CONTACT_LAWS = ("rigid", "compliant", "hertz")
+#: The damping laws of :mod:`camdyn.params.laws` offered for the Hertz law of a
+#: translating follower (those whose coefficients need no law-dependent unit).
+HERTZ_DAMPING_LAWS = ("none", "viscous", "hunt-crossley", "lankarani-nikravesh", "flores", "gonthier", "hu-guo")
+#: Keys of the Hertz law only (``contact.law = "hertz"``).
+HERTZ_KEYS = ("contact.cam_modulus", "contact.cam_poisson", "contact.follower_modulus", "contact.follower_poisson",
+              "contact.geometry", "contact.width", "contact.tip_radius", "contact.damping_law",
+              "contact.reference_velocity")
 #: Profile kind -> the ``profile.*`` keys it uses (besides ``profile.kind``).
 PROFILE_KINDS = {
     "rise-return": ("profile.base_radius", "profile.segments"),
@@ -75,11 +83,22 @@ SCHEMA: dict[str, tuple[str, object, str]] = {
     "follower.offset": ("m", 0.0, "offset epsilon of the follower's line from the cam's axis"),
     "spring.stiffness": ("N/m", _REQUIRED, "spring stiffness k"),
     "spring.preload": ("N", _REQUIRED, "spring force F0 when the follower rests on the base circle"),
-    "contact.law": ("str", "rigid", "'rigid' (Newton restitution) or 'compliant' (spring-dashpot penalty)"),
-    "contact.restitution": ("", 0.8, "Newton's coefficient of restitution e (rigid)"),
+    "contact.law": ("str", "rigid", "'rigid' (Newton restitution), 'compliant' (spring-dashpot penalty) or "
+                                    "'hertz' (Hertz stiffness of the materials and geometry)"),
+    "contact.restitution": ("", 0.8, "coefficient of restitution e: Newton's (rigid), the restitution "
+                                      "damping laws' (hertz)"),
     "contact.capture_velocity": ("m/s", 1e-6, "impacts slower than this end in sustained contact (rigid)"),
     "contact.stiffness": ("N/m", 0.0, "penalty stiffness kc (compliant)"),
-    "contact.damping": ("N*s/m", 0.0, "penalty damping cc (compliant)"),
+    "contact.damping": ("N*s/m", 0.0, "penalty damping cc (compliant); c of the viscous damping law (hertz)"),
+    "contact.cam_modulus": ("Pa", 210e9, "Young's modulus of the cam Y_c (hertz)"),
+    "contact.cam_poisson": ("", 0.3, "Poisson's ratio of the cam nu_c (hertz)"),
+    "contact.follower_modulus": ("Pa", 210e9, "Young's modulus of the follower Y_f (hertz)"),
+    "contact.follower_poisson": ("", 0.3, "Poisson's ratio of the follower nu_f (hertz)"),
+    "contact.geometry": ("str", "", "'line' or 'point' (hertz); default point for a knife edge, line otherwise"),
+    "contact.width": ("m", 0.0, "contact length l of line contact: the cam's or roller's width (hertz)"),
+    "contact.tip_radius": ("m", 0.0, "tip radius of a knife edge, point contact (hertz)"),
+    "contact.damping_law": ("str", "none", "damping law (hertz): " + ", ".join(HERTZ_DAMPING_LAWS)),
+    "contact.reference_velocity": ("m/s", 1e-3, "smallest approach velocity of the restitution laws (hertz)"),
     "environment.gravity": ("m/s**2", 0.0, "gravity g along the follower's line, towards the cam"),
     "profile.kind": ("str", _REQUIRED, "'rise-return', 'circular-arc', 'eccentric-circle' or 'tabulated'"),
     "profile.base_radius": ("m", _REQUIRED, "base circle radius r_base (not for an eccentric circle)"),
@@ -105,8 +124,9 @@ _META_KEYS = ("preset.name", "preset.citation", "preset.description")
 #: Keys that must not be negative, and those that must be positive.
 _NOT_NEGATIVE = ("follower.damping", "follower.roller_radius", "spring.stiffness", "spring.preload",
                  "contact.capture_velocity", "contact.stiffness", "contact.damping", "environment.gravity",
-                 "profile.eccentricity")
-_POSITIVE = ("follower.mass", "profile.base_radius", "profile.radius")
+                 "profile.eccentricity", "contact.width", "contact.tip_radius")
+_POSITIVE = ("follower.mass", "profile.base_radius", "profile.radius", "contact.cam_modulus",
+             "contact.follower_modulus", "contact.reference_velocity")
 
 
 @dataclass(frozen=True)
@@ -124,9 +144,15 @@ class TranslatingSpec:
     roller_radius, offset : float
         r_r and epsilon [m].
     contact : str
-        ``"rigid"`` or ``"compliant"``.
+        ``"rigid"``, ``"compliant"`` or ``"hertz"``.
     restitution, capture_velocity, contact_stiffness, contact_damping : float
-        e [-], [m/s], kc [N/m], cc [N s/m].
+        e [-], [m/s], kc [N/m], cc [N s/m] (cc: the viscous c of the Hertz law).
+    cam_modulus, cam_poisson, follower_modulus, follower_poisson, width, tip_radius : float
+        Y_c [Pa], nu_c [-], Y_f [Pa], nu_f [-], l [m], r_f [m] of the Hertz law.
+    geometry, damping_law : str
+        ``"line"``, ``"point"`` or ``""`` (the face's own); a :data:`HERTZ_DAMPING_LAWS` name.
+    reference_velocity : float
+        Smallest approach velocity of its restitution laws [m/s].
     profile_kind : str
         A key of :data:`PROFILE_KINDS`.
     base_radius : float
@@ -169,6 +195,15 @@ class TranslatingSpec:
     file: Path | None = None
     speed: float | None = None
     phase: float = 0.0
+    cam_modulus: float = 210e9
+    cam_poisson: float = 0.3
+    follower_modulus: float = 210e9
+    follower_poisson: float = 0.3
+    geometry: str = ""
+    width: float = 0.0
+    tip_radius: float = 0.0
+    damping_law: str = "none"
+    reference_velocity: float = 1e-3
 
 
 def _unknown(key: str, known) -> UnknownKeyError:
@@ -269,6 +304,25 @@ def _check_ranges(values: dict) -> None:
         raise ParameterError(f"motion.speed must be positive, got {values['speed']!r} rad/s")
 
 
+def _check_hertz(flat: dict, values: dict) -> None:
+    """The Hertz law's keys: only under it (and no penalty stiffness there), ratios in range,
+    a known damping law (the geometry is checked with the profile, by
+    :class:`camdyn.simulation.translating_contact.HertzContact`)."""
+    law = values["contact.law"]
+    foreign = [key for key in (HERTZ_KEYS if law != "hertz" else ("contact.stiffness",)) if key in flat]
+    if foreign:
+        raise UnknownKeyError(f"{foreign[0]} is not a key of the {law!r} contact law (the Hertz law takes "
+                              f"{', '.join(HERTZ_KEYS)}, and no contact.stiffness)")
+    for key in ("contact.cam_poisson", "contact.follower_poisson"):
+        if not -1.0 < values[key] < 0.5:
+            raise ParameterError(f"{key} must lie in (-1, 0.5), got {values[key]!r}")
+    if values["contact.damping_law"] not in HERTZ_DAMPING_LAWS:
+        raise ParameterError(f"contact.damping_law must be one of {', '.join(HERTZ_DAMPING_LAWS)}, got "
+                             f"{values['contact.damping_law']!r}")
+    if values["contact.geometry"] not in ("", "line", "point"):
+        raise ParameterError(f"contact.geometry must be 'line' or 'point', got {values['contact.geometry']!r}")
+
+
 def _converted(flat: dict) -> dict:
     """Dotted key -> stored value, defaults filled in, for the keys of the profile's kind."""
     kind = flat.get("profile.kind")
@@ -314,6 +368,7 @@ def spec_from_table(flat: dict, name: str = "custom", citation: str = "", folder
         raise ParameterError(f"follower.kind is {flat['follower.kind']!r}; this reader takes 'translating'")
     v = _converted(flat)
     _check_ranges(v)
+    _check_hertz(flat, v)
     kind = v["profile.kind"]
     extra = {}
     if kind == "rise-return":
@@ -335,7 +390,7 @@ def spec_from_table(flat: dict, name: str = "custom", citation: str = "", folder
         contact=v["contact.law"], restitution=v["contact.restitution"],
         capture_velocity=v["contact.capture_velocity"], contact_stiffness=v["contact.stiffness"],
         contact_damping=v["contact.damping"], profile_kind=kind, base_radius=base, speed=v["speed"],
-        phase=v["motion.phase"], **extra)
+        phase=v["motion.phase"], **{key.split(".")[1]: v[key] for key in HERTZ_KEYS}, **extra)
 
 
 def _flatten(table: dict, prefix: str = "") -> dict:

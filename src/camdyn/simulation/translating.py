@@ -30,12 +30,13 @@ from camdyn.model.profiles import (
 )
 from camdyn.params.profiles import TranslatingSpec
 from camdyn.simulation import limits
+from camdyn.simulation.translating_contact import HertzContact
 from camdyn.systems import registry as systems
 
-__all__ = ["TranslatingFollower", "simulate_translating", "alzate_rig", "liftoff_speed", "follower_from_spec",
-           "CONTACT_LAWS"]
+__all__ = ["TranslatingFollower", "HertzContact", "simulate_translating", "alzate_rig", "liftoff_speed",
+           "follower_from_spec", "CONTACT_LAWS"]
 
-CONTACT_LAWS = {"rigid": model.RIGID, "compliant": model.COMPLIANT}
+CONTACT_LAWS = {"rigid": model.RIGID, "compliant": model.COMPLIANT, "hertz": model.HERTZ}
 
 
 @dataclass(frozen=True)
@@ -57,14 +58,16 @@ class TranslatingFollower:
     gravity : float
         Gravity g [m/s^2] along the follower's line, towards the cam (0: none).
     contact : str
-        ``"rigid"`` (Newton restitution, sustained contact) or ``"compliant"`` (linear
-        spring-dashpot penalty).
+        ``"rigid"`` (Newton restitution, sustained contact), ``"compliant"`` (linear
+        spring-dashpot penalty) or ``"hertz"`` (the Hertz law of ``hertz``).
     restitution : float
         Newton's coefficient of restitution e [-] (rigid).
     capture_velocity : float
         Impacts slower than this [m/s] end in sustained contact (rigid).
     contact_stiffness, contact_damping : float
         kc [N/m] and cc [N s/m] of the compliant law.
+    hertz : HertzContact or None
+        Materials, geometry and damping of the Hertz law (required by ``"hertz"``).
     citation : str
         Where the numbers come from.
     """
@@ -80,6 +83,7 @@ class TranslatingFollower:
     capture_velocity: float = 1e-6
     contact_stiffness: float = 0.0
     contact_damping: float = 0.0
+    hertz: HertzContact | None = None
     citation: str = field(default="", compare=False)
 
     def __post_init__(self):
@@ -100,14 +104,22 @@ class TranslatingFollower:
             raise ParameterError(f"restitution must be between 0 and 1, got {self.restitution!r}")
         if self.contact == "compliant" and self.contact_stiffness <= 0.0:
             raise ParameterError("the compliant contact needs a positive contact_stiffness [N/m]")
+        if self.contact == "hertz":
+            if not isinstance(self.hertz, HertzContact):
+                raise ParameterError("the Hertz contact needs its materials and geometry (hertz=HertzContact(...))")
+            self.hertz.check(self.profile)
 
     def pack(self, speed, phase=0.0):
         """The parameter vector of the compiled model at ``speed`` [rad/s], cam angle
         ``phase`` [rad] at t = 0."""
+        contact = {"restitution": self.restitution, "contact_stiffness": self.contact_stiffness,
+                   "contact_damping": self.contact_damping}
+        if self.contact == "hertz":   # its damping and restitution, and its slots
+            contact.update(restitution=self.hertz.restitution, contact_damping=self.hertz.damping,
+                           hertz_law=self.hertz.slots(self.profile))
         return model.pack(self.profile, self.mass, self.stiffness, self.preload, speed, damping=self.damping,
                           phase=phase, gravity=self.gravity, law=CONTACT_LAWS[self.contact],
-                          restitution=self.restitution, capture=self.capture_velocity,
-                          contact_stiffness=self.contact_stiffness, contact_damping=self.contact_damping)
+                          capture=self.capture_velocity, **contact)
 
 
 #: The circular-arc cam of the Siconos cam-follower example (the cam law of its
@@ -124,7 +136,7 @@ ALZATE_CITATION = (
     "systems', arXiv:0711.1008 (2007)")
 
 
-def alzate_rig(contact="rigid", contact_stiffness=0.0, contact_damping=0.0):
+def alzate_rig(contact="rigid", contact_stiffness=0.0, contact_damping=0.0, hertz=None):
     """The cam-follower rig of Alzate and di Bernardo as the Siconos project's example
     gives it: an in-line knife-edge follower (m = 1.221 kg, k = 1430.8 N/m, e = 0.8) on a
     symmetric cam of circular arcs: the base circle (r = 0.40 m) for half a turn, a flank
@@ -133,7 +145,8 @@ def alzate_rig(contact="rigid", contact_stiffness=0.0, contact_damping=0.0):
     back. The spring is relaxed at 0.30 m from the axis, so its preload on the base circle
     is ``k (0.40 - 0.30) = 143.08 N``; no gravity, no damping. Use the phase pi/2 of the
     source (``simulate_translating(..., phase=math.pi / 2)``) to start where it starts,
-    at the end of the base dwell."""
+    at the end of the base dwell. ``contact="hertz"`` takes the Hertz law's
+    :class:`HertzContact` as ``hertz`` (a rounded tip: ``HertzContact(tip_radius=...)``)."""
     a = ALZATE_ARCS
     quarter = 0.5 * math.pi
     nose_angle = math.pi - math.pi / 9.0   # the nose arc's centre in the cam's frame [rad]
@@ -150,7 +163,7 @@ def alzate_rig(contact="rigid", contact_stiffness=0.0, contact_damping=0.0):
     stiffness = 1430.8
     return TranslatingFollower(profile, mass=1.221, stiffness=stiffness, preload=stiffness * (a["base"] - 0.30),
                                contact=contact, restitution=0.8, contact_stiffness=contact_stiffness,
-                               contact_damping=contact_damping, citation=ALZATE_CITATION)
+                               contact_damping=contact_damping, hertz=hertz, citation=ALZATE_CITATION)
 
 
 def follower_from_spec(spec, lift=None):
@@ -190,7 +203,18 @@ def follower_from_spec(spec, lift=None):
                                damping=spec.damping, gravity=spec.gravity, contact=spec.contact,
                                restitution=spec.restitution, capture_velocity=spec.capture_velocity,
                                contact_stiffness=spec.contact_stiffness, contact_damping=spec.contact_damping,
-                               citation=spec.citation)
+                               hertz=_hertz_of(spec), citation=spec.citation)
+
+
+def _hertz_of(spec):
+    """The :class:`HertzContact` of a configuration whose contact law is ``"hertz"``."""
+    if spec.contact != "hertz":
+        return None
+    return HertzContact(cam_modulus=spec.cam_modulus, cam_poisson=spec.cam_poisson,
+                        follower_modulus=spec.follower_modulus, follower_poisson=spec.follower_poisson,
+                        geometry=spec.geometry, width=spec.width, tip_radius=spec.tip_radius,
+                        damping_law=spec.damping_law, damping=spec.contact_damping, restitution=spec.restitution,
+                        reference_velocity=spec.reference_velocity)
 
 
 def liftoff_speed(follower, samples=200_000):
@@ -262,8 +286,8 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
         the ``contact_force`` and ``in_contact``; over ``event``: ``event_time``,
         ``event_kind`` (``impact``, ``capture`` into sustained contact, ``graze``: a
         touch slower than the capture velocity where the cam does not push, which leaves
-        the follower in flight, ``separation``, and for the compliant law ``contact
-        onset`` and ``contact end``), ``event_velocity`` (approach velocity of an impact, ``x_dot -
+        the follower in flight, ``separation``, and for the compliant and Hertz laws
+        ``contact onset`` and ``contact end``), ``event_velocity`` (approach velocity of an impact, ``x_dot -
         s_dot`` [m/s]). Attributes hold the parameters and the solver counters.
     """
     if not isinstance(follower, TranslatingFollower):
@@ -313,7 +337,7 @@ def _event_table(events, p):
     for ev in events:
         t, k, v = ev[0], int(ev[1]), ev[driver.EVENT_GUARDS + m + 1]
         sd = model.cam(t, p)[2]
-        if p[model.LAW] == model.COMPLIANT:
+        if p[model.LAW] != model.RIGID:
             kinds.append("contact onset" if ev[2] < 0 else "contact end")
         elif k == 1:
             kinds.append("separation")
@@ -362,6 +386,13 @@ def _dataset(follower, p, t, y, modes, events, counters, elapsed, speed, phase, 
         "base_radius_m": follower.profile.base_radius, "rtol": rtol, "atol": atol, "elapsed_s": elapsed,
         "status": driver.STATUS_MESSAGES[int(counters[driver.COUNT_STATUS])],
     })
+    if follower.contact == "hertz":
+        law = follower.hertz
+        ds.attrs.update({
+            "hertz_modulus_Pa": law.modulus, "hertz_geometry": law.geometry_of(follower.profile.follower),
+            "hertz_width_m": law.width, "hertz_follower_radius_m": float(p[model.FOLLOWER_RADIUS]),
+            "hertz_damping_law": law.damping_law, "hertz_damping_N_s_per_m": law.damping,
+            "hertz_restitution": law.restitution, "hertz_reference_velocity_m_per_s": law.reference_velocity})
     for i, name in enumerate(driver.COUNTER_NAMES):
         ds.attrs[f"solver_{name}"] = int(counters[i])
     return ds
