@@ -1,0 +1,208 @@
+"""Two rocking followers on one driven cam: the symmetric placement against the single
+driven follower, the energy balance with the drive's work, an independent SciPy solution
+of the equations, the follower dimension of the result, and the refusals."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from camdyn.errors import ParameterError
+from camdyn.model import driven_cam
+from camdyn.model import layout as L
+from camdyn.model import two_followers as pair
+from camdyn.simulation.mechanisms import DRIVEN_STATE, CamDrive, simulate_driven_cam
+from camdyn.simulation.runner import prepare
+from camdyn.simulation.two_followers import drum_brake, pack_two_followers, simulate_two_followers
+from camdyn.testing.oracle import ReferenceModel
+
+
+def test_two_opposite_identical_followers_each_match_the_single_follower(friction_rig):
+    # a cam symmetric under half a turn (an ellipse about its centre: no runout) and two
+    # identical followers half a turn apart: both move as one follower does, and the
+    # shaft takes twice its reaction. J Theta'' = T_drive + 2 T_contact is the single
+    # follower's shaft with J/2 and half the drive and bearing torques.
+    s = friction_rig.with_values(**{"motion.speed": 11.55, "cam.runout": 0.0, "cam.semi_minor": 0.016,
+                                    "environment.gravity": 0.0})
+    omega = s.motion.angular_speed
+    drive = CamDrive(shaft_inertia=2e-4, kind="motor", stall_torque=1.0, free_speed=1.2 * omega,
+                     bearing_viscous=2e-4)
+    half = CamDrive(shaft_inertia=1e-4, kind="motor", stall_torque=0.5, free_speed=1.2 * omega,
+                    bearing_viscous=1e-4)
+    both = simulate_two_followers(s, drive, placement=math.pi, revolutions=0.5, sample_rate=10e3, rtol=1e-12,
+                                  atol=1e-14)
+    one = simulate_driven_cam(s, half, revolutions=0.5, sample_rate=10e3, rtol=1e-12, atol=1e-14)
+    assert one.attrs["coefficient_of_fluctuation"] > 1e-3   # the shaft's speed does respond
+    for name in ("alpha", "alpha_dot"):
+        scale = np.max(np.abs(one[name].values))
+        for k in (1, 2):
+            np.testing.assert_allclose(both[name].sel(follower=k).values, one[name].values, rtol=0,
+                                       atol=1e-9 * scale, err_msg=f"{name} of follower {k}")
+    for name in ("cam_angle", "cam_speed"):
+        np.testing.assert_allclose(both[name].values, one[name].values, rtol=0,
+                                   atol=1e-9 * np.max(np.abs(one[name].values)), err_msg=name)
+    # the shaft's books: the cam's work on both followers is twice that on the one
+    np.testing.assert_allclose(both.cam_work.sum("follower").values, 2 * one.cam_work.values, rtol=0,
+                               atol=1e-9 * np.max(np.abs(one.cam_work.values)))
+    # the reaction torque at one state is doubled. (Along the runs it agrees to
+    # about 2e-8 only: the normal force follows the micrometre penetration, a small
+    # difference of millimetre lengths, so the 1e-10 agreement of the angles becomes
+    # about 1e-8 in the force.)
+    p_one = np.r_[prepare(s).p, half.slots()]
+    p_both, _ = pack_two_followers(s, s, math.pi, drive)
+    for row in range(0, one.time.size, 7):
+        y = np.array([one[name].values[row] for name, *_ in DRIVEN_STATE])
+        mode = np.empty(L.MODE_SIZE)
+        driven_cam.initial_mode(0.0, y, p_one, mode)
+        single = driven_cam.accelerations(y, mode, p_one)[4]
+        y2 = np.r_[y[:2], y[:2], y[2:5], y[5:6], 0.0, y[7], y[7]]
+        modes = np.empty(pair.MODE_SIZE)
+        pair.initial_mode(0.0, y2, p_both, modes)
+        _, _, _, _, _, torque1, torque2, _, _ = pair.accelerations(y2, modes, p_both)
+        assert torque1 == single   # follower 1 is the single follower's code on the same numbers
+        # follower 2 sees the cam at Theta - pi: the rounding of that angle (1e-16) is
+        # amplified by the penetration's conditioning (millimetres over micrometres, ~1e4)
+        assert torque2 == pytest.approx(single, rel=1e-9, abs=1e-15)
+
+
+def test_the_energy_of_both_followers_and_the_shaft_balances_the_drive_work(impact_rig):
+    # undamped, frictionless contacts, a circular eccentric cam, follower 2 placed 2 rad
+    # round with a stiffer spring, a DC motor and a light shaft: the kinetic energies, the
+    # springs' and contacts' potentials less the drive's work stay constant through
+    # impacts. The potentials are written here from docs/model.md (as in test_driven_cam).
+    s = impact_rig.with_values(**{"contact.damping": "none", "friction.law": "none", "motion.speed": 16.0,
+                                  "environment.gravity": 0.0})
+    second = s.with_values(**{"spring.stiffness": 1.3 * s.spring.stiffness})
+    assert s.cam.is_circle and s.contact.kind == "point" and s.spring.tilt == 0.0
+    omega = s.motion.angular_speed
+    drive = CamDrive(shaft_inertia=2e-4, kind="motor", stall_torque=0.5, free_speed=1.1 * omega)
+    ds = simulate_two_followers(s, drive, second=second, placement=2.0, revolutions=2, sample_rate=50e3,
+                                rtol=1e-11, atol=1e-13)
+    assert ds.attrs["events"] > 4 and (np.ptp(ds.in_contact.values, axis=0) == 1).all()
+    assert ds.attrs["coefficient_of_fluctuation"] > 1e-3
+    c = s.cam
+    rho_e = 1 / (1 / c.semi_major + 1 / s.follower.pin_radius)
+    estar = 1 / ((1 - c.poisson_ratio ** 2) / c.youngs_modulus + (1 - s.follower.poisson_ratio ** 2)
+                 / s.follower.youngs_modulus)
+    total = 0.5 * drive.shaft_inertia * ds.cam_speed.values ** 2 - ds.drive_work.values
+    kinetic = 0.5 * drive.shaft_inertia * ds.cam_speed.values ** 2
+    for k, sk in ((1, s), (2, second)):
+        f, sp = sk.follower, sk.spring
+        a, ad = ds.alpha.sel(follower=k).values, ds.alpha_dot.sel(follower=k).values
+        v_spring = sp.stiffness * sp.attachment_x * (
+            (sp.free_length - sp.ground_depth) * a - sp.attachment_x * np.log(np.cos(a))
+            + 0.5 * f.width * np.log(1 / np.cos(a) + np.tan(a)))
+        delta = np.clip(ds.penetration.sel(follower=k).values, 0, None)
+        v_contact = 0.4 * 4 / 3 * estar * math.sqrt(rho_e) * delta ** 2.5
+        total = total + 0.5 * f.inertia * ad ** 2 + v_spring + v_contact
+        kinetic = kinetic + 0.5 * f.inertia * ad ** 2
+    assert np.ptp(total) < 1e-6 * np.ptp(kinetic), np.ptp(total) / np.ptp(kinetic)
+    # the shaft's books: W_drive = dT_shaft + W_cam,1 + W_cam,2
+    shaft = 0.5 * drive.shaft_inertia * ds.cam_speed.values ** 2
+    np.testing.assert_allclose(ds.drive_work.values - (shaft - shaft[0]), ds.cam_work.sum("follower").values,
+                               rtol=0, atol=1e-6 * np.ptp(kinetic))
+
+
+def _scipy_two_followers(models, phi, drive, y0, t_eval):
+    """The two followers' and the shaft's equations written again on the independent
+    geometry and forces of :class:`camdyn.testing.oracle.ReferenceModel` (one per
+    follower; follower 2 sees the cam at ``Theta - phi``), with the DC motor and the
+    bearing: ``J Theta'' = T_stall (1 - Theta'/omega_free) - c_b Theta' + T_1 + T_2``,
+    ``T_i`` the moment about E of follower i's reaction ``+Fn n - Ff u`` at its contact
+    point. Contacts begin and end where a penetration crosses zero (terminal events,
+    then a restart)."""
+    shifts = (0.0, phi)
+
+    def penetration(i):
+        def event(t, y, *_):
+            return models[i].geometry_at(y[4] - shifts[i], y[5], y[2 * i], y[2 * i + 1])[0]
+        return event
+
+    events = [penetration(0), penetration(1)]
+
+    def rhs(t, y, contact):
+        theta, theta_dot = y[4], y[5]
+        out = [0.0] * 6
+        torque = drive.stall_torque * (1 - theta_dot / drive.free_speed) - drive.bearing_viscous * theta_dot
+        for i, model in enumerate(models):
+            th = theta - shifts[i]
+            model.cam = lambda _t, th=th: (th, theta_dot)
+            acc, fn, ff, _, _ = model.forces(t, [y[2 * i], y[2 * i + 1]], contact[i], 1.0,
+                                             model.s.contact.reference_velocity)
+            *_, arm, n, u = model.geometry_at(th, 1.0, y[2 * i], y[2 * i + 1])   # arm = z x (Xc - E)
+            if contact[i]:
+                torque += fn * (n @ arm) - ff * (u @ arm)
+            out[2 * i], out[2 * i + 1] = y[2 * i + 1], acc
+        out[4], out[5] = theta_dot, torque / drive.shaft_inertia
+        return out
+
+    out = np.full((6, t_eval.size), np.nan)
+    t, y = 0.0, np.asarray(y0, float)
+    contact = [events[i](0.0, y) > 0 for i in range(2)]
+    switches = 0
+    while t < t_eval[-1]:
+        for i in range(2):
+            events[i].terminal, events[i].direction = True, -1 if contact[i] else 1
+        sol = solve_ivp(rhs, (t, t_eval[-1]), y, method="DOP853", args=(tuple(contact),), events=events,
+                        dense_output=True, rtol=1e-12, atol=1e-14)
+        inside = (t_eval >= t) & (t_eval <= sol.t[-1])
+        if inside.any():
+            out[:, inside] = sol.sol(t_eval[inside])
+        t, y = sol.t[-1], sol.y[:, -1]
+        if sol.status == 1:
+            for i in range(2):
+                if sol.t_events[i].size:
+                    contact[i] = not contact[i]
+                    switches += 1
+    return out, switches
+
+
+def test_an_independent_scipy_solution_agrees(friction_rig):
+    s = friction_rig.with_values(**{"motion.speed": 11.55, "friction.law": "tanh", "environment.gravity": 0.0})
+    second = s.with_values(**{"spring.stiffness": 0.8 * s.spring.stiffness})
+    phi = 2.5
+    omega = s.motion.angular_speed
+    drive = CamDrive(shaft_inertia=1e-4, kind="motor", stall_torque=1.5, free_speed=1.2 * omega,
+                     bearing_viscous=1e-4)
+    ds = simulate_two_followers(s, drive, second=second, placement=phi, revolutions=1, sample_rate=10e3,
+                                rtol=1e-11, atol=1e-13)
+    p, y0 = pack_two_followers(s, second, phi, drive)
+    models = (ReferenceModel(s, y0[4], p[L.VISCOUS_C]),
+              ReferenceModel(second, y0[4] - phi, p[pair.SECOND + L.VISCOUS_C]))
+    ref, switches = _scipy_two_followers(models, phi, drive, y0[:6], ds.time.values)
+    assert switches >= 2 and ds.attrs["coefficient_of_fluctuation"] > 0.01
+    names = [("alpha", 1), ("alpha_dot", 1), ("alpha", 2), ("alpha_dot", 2), ("cam_angle", None),
+             ("cam_speed", None)]
+    for i, (name, k) in enumerate(names):
+        got = ds[name].values if k is None else ds[name].sel(follower=k).values
+        scale = np.max(np.abs(ref[i]))
+        np.testing.assert_allclose(got, ref[i], rtol=0, atol=1e-6 * scale, err_msg=f"{name} {k}")
+
+
+def test_the_drum_brake_carries_a_follower_dimension_with_units():
+    rig = drum_brake()
+    ds = simulate_two_followers(rig.system, rig.drive, second=rig.second, placement=rig.placement,
+                                revolutions=0.25, sample_rate=5e3)
+    assert ds.sizes["follower"] == 2 and list(ds.follower.values) == [1, 2]
+    assert ds.alpha.dims == ("time", "follower") and ds.alpha.attrs["units"] == "rad"
+    assert ds.Fn.dims == ("time", "follower") and ds.Fn.attrs["units"] == "N"
+    assert ds.cam_speed.dims == ("time",) and ds.cam_speed.attrs["units"] == "rad/s"
+    assert ds.attrs["placement"] == math.pi
+    # the total reaction torque is the sum of the followers'
+    np.testing.assert_array_equal(ds.contact_torque_total.values, ds.contact_torque.sum("follower").values)
+
+
+def test_bad_pairs_are_refused(friction_rig, impact_rig):
+    drive = CamDrive(shaft_inertia=1e-3)
+    with pytest.raises(ParameterError, match="ride on one cam"):
+        simulate_two_followers(friction_rig, drive, second=impact_rig, placement=0.0)
+    with pytest.raises(ParameterError, match="gravity"):
+        simulate_two_followers(friction_rig, drive, placement=1.0)
+    with pytest.raises(ParameterError, match="placement must be finite"):
+        simulate_two_followers(friction_rig, drive, placement=math.nan)
+    s = friction_rig.with_values(**{"motion.kind": "oscillating", "motion.amplitude": 0.6, "motion.frequency": 3.0})
+    with pytest.raises(ParameterError, match="constant motion"):
+        simulate_two_followers(s, drive, placement=0.0)
+    with pytest.raises(ParameterError, match="CamDrive"):
+        simulate_two_followers(friction_rig, "motor", placement=0.0)
