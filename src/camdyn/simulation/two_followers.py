@@ -72,8 +72,27 @@ def _check_pair(system: System, second: System, placement: float) -> float:
     return phi
 
 
+def _check_static(static_friction, systems_pair) -> np.ndarray:
+    """The ``mu_s`` slots: -1 (no stick phase) or each follower's static coefficient,
+    checked against its kinetic one."""
+    if static_friction is None:
+        return np.array([-1.0, -1.0])
+    values = np.broadcast_to(np.asarray(static_friction, dtype=float), (2,)).copy() if np.ndim(
+        static_friction) == 0 or np.size(static_friction) == 2 else None
+    if values is None or not np.isfinite(values).all():
+        raise ParameterError(f"static_friction must be one or two finite coefficients, got {static_friction!r}")
+    for k, (mu_s, s) in enumerate(zip(values, systems_pair), start=1):
+        if s.friction.law != "coulomb":
+            raise ParameterError(f"the stick phase needs Coulomb friction (follower {k} has "
+                                 f"friction.law = {s.friction.law!r})")
+        if mu_s < s.friction.coefficient:
+            raise ParameterError(f"follower {k}: the static friction coefficient ({mu_s}) must not be below the "
+                                 f"kinetic one ({s.friction.coefficient})")
+    return values
+
+
 def pack_two_followers(system: System, second: System, placement: float, drive: CamDrive,
-                       initial_speed: float | None = None):
+                       initial_speed: float | None = None, static_friction=None, initial_angles=None):
     """Parameter vector and starting state of the two-follower model.
 
     Parameters
@@ -88,6 +107,13 @@ def pack_two_followers(system: System, second: System, placement: float, drive: 
         The shaft's inertia, drive and bearing.
     initial_speed : float, optional
         Starting cam speed [rad/s]; default ``system.motion``'s angular speed.
+    static_friction : float or (float, float), optional
+        Static friction coefficients ``mu_s`` [-] of the followers (one for both, or one
+        each), at least their Coulomb ``friction.coefficient``; default none, no stick
+        phase (kinetic Coulomb friction only).
+    initial_angles : (float, float), optional
+        Starting follower angles [rad], at rest; default each follower's static
+        equilibrium.
 
     Returns
     -------
@@ -108,11 +134,17 @@ def pack_two_followers(system: System, second: System, placement: float, drive: 
     first = prepare(system.with_values(**motion) if initial_speed is not None else system)
     theta0 = first.theta0
     other = prepare(second.with_values(**motion, **{"motion.initial_angle": theta0 - phi}))
-    p = np.r_[first.p, drive.slots(), phi, other.p]
+    statics = _check_static(static_friction, (system, second))
+    p = np.r_[first.p, drive.slots(), phi, statics, np.zeros(pair.MODE_SIZE), other.p]
     assert p.size == pair.SIZE
     y0 = np.zeros(pair.STATE_SIZE)
     y0[0] = first.equilibrium.angle
     y0[2] = other.equilibrium.angle
+    if initial_angles is not None:
+        angles = np.asarray(initial_angles, dtype=float)
+        if angles.shape != (2,) or not np.isfinite(angles).all():
+            raise ParameterError(f"initial_angles must be two finite angles [rad], got {initial_angles!r}")
+        y0[[0, 2]] = angles
     y0[4] = theta0
     y0[5] = speed
     return p, y0
@@ -120,8 +152,9 @@ def pack_two_followers(system: System, second: System, placement: float, drive: 
 
 def simulate_two_followers(system: System, drive: CamDrive, second: System | None = None,
                            placement: float = math.pi, revolutions: float = 5.0, duration: float | None = None,
-                           sample_rate: float = 20e3, initial_speed: float | None = None, rtol: float = 1e-9,
-                           atol: float = 1e-11, method: str = "auto", max_step: float | None = None) -> xr.Dataset:
+                           sample_rate: float = 20e3, initial_speed: float | None = None, static_friction=None,
+                           initial_angles=None, rtol: float = 1e-9, atol: float = 1e-11, method: str = "auto",
+                           max_step: float | None = None) -> xr.Dataset:
     """Simulate two rocking followers on one cam turning as a rigid body.
 
     Parameters
@@ -146,6 +179,11 @@ def simulate_two_followers(system: System, drive: CamDrive, second: System | Non
         Output sampling rate [Hz].
     initial_speed : float, optional
         Starting cam speed [rad/s]; default ``system.motion``'s angular speed.
+    static_friction : float or (float, float), optional
+        Static friction coefficients ``mu_s`` [-] (:func:`pack_two_followers`); given, the
+        Coulomb contacts stick (stick-slip); default none, kinetic friction only.
+    initial_angles : (float, float), optional
+        Starting follower angles [rad] (:func:`pack_two_followers`).
     rtol, atol : float
         Local error tolerances: relative [-] and absolute [rad, rad/s, J].
     method : {"auto", "dop853", "explicit", "rosenbrock"}
@@ -159,7 +197,8 @@ def simulate_two_followers(system: System, drive: CamDrive, second: System | Non
         Over ``time`` and ``follower`` (1, 2): :data:`PER_FOLLOWER_STATE` and the
         channels of :data:`camdyn.model.two_followers.CHANNELS`; over ``time``:
         :data:`SHAFT_STATE`, the shaft channels, ``contact_torque_total`` [N m] and
-        ``speed_fluctuation`` [rad/s]; attributes: the placement, the coefficient of speed
+        ``speed_fluctuation`` [rad/s]; over ``transition``: the stick-slip switches
+        (``transition_time`` [s], ``transition_follower``, ``transition_kind``); attributes: the placement, the coefficient of speed
         fluctuation, the mean speed and the solver counters.
 
     Raises
@@ -169,7 +208,7 @@ def simulate_two_followers(system: System, drive: CamDrive, second: System | Non
         placement with gravity, or bad run settings; all before any work.
     """
     second = system if second is None else second
-    p, y0 = pack_two_followers(system, second, placement, drive, initial_speed)
+    p, y0 = pack_two_followers(system, second, placement, drive, initial_speed, static_friction, initial_angles)
     speed = y0[5]
     period = 2.0 * math.pi / abs(speed) if speed != 0.0 else math.inf
     if duration is None:
@@ -192,12 +231,46 @@ def simulate_two_followers(system: System, drive: CamDrive, second: System | Non
                                     {"units": "N m", "long_name": "moment of both followers' reactions on the cam"})
     mean = float(np.mean(y[:, 5]))
     data["speed_fluctuation"] = (("time",), y[:, 5] - mean, {"units": "rad/s", "long_name": "cam speed less its mean"})
+    sticking = [name for name, *_ in pair.CHANNELS].index("sticking")
+    data.update(_transitions(events, t, per[:, :, sticking]))
     attrs.update(placement=float(p[pair.PLACEMENT]), mean_cam_speed=mean,
                  coefficient_of_fluctuation=speed_fluctuation(y[:, 5]), drive_kind=drive.kind,
                  shaft_inertia=drive.shaft_inertia)
     coords = {"time": ("time", t, {"units": "s", "long_name": "time"}),
               "follower": ("follower", np.array([1, 2]), {"units": "1", "long_name": "follower number"})}
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def _transitions(events: np.ndarray, t: np.ndarray, sticking: np.ndarray) -> dict:
+    """The stick-slip transitions from the event log, over a ``transition`` dimension:
+    time [s], follower (1, 2) and kind: ``"slip"``, a stick that broke (a stick guard);
+    at a zero of the sliding velocity, ``"stick"`` if the follower's next switch is a
+    stick that breaks (or, with none, if it still sticks at the first sample after),
+    else ``"reversal"`` (it slid through). ``sticking`` (n, 2) is the sampled flag."""
+    from camdyn.integrator import driver
+
+    guard = events[:, driver.EVENT_GUARD].astype(int)
+    follower, local = np.divmod(guard, pair.GUARDS_EACH)
+    times, followers, kinds = [], [], []
+    for row in np.nonzero(np.isin(local, (1, 3, 4)))[0]:
+        i = follower[row]
+        if local[row] != 1:
+            kind = "slip"
+        else:
+            later = np.nonzero((follower[row + 1:] == i) & np.isin(local[row + 1:], (0, 1, 3, 4)))[0]
+            if later.size and local[row + 1 + later[0]] in (1, 3, 4):
+                kind = "stick" if local[row + 1 + later[0]] != 1 else "reversal"
+            else:
+                after = np.searchsorted(t, events[row, driver.EVENT_TIME], side="right")
+                kind = "stick" if after < t.size and sticking[after, i] > 0.5 else "reversal"
+        times.append(events[row, driver.EVENT_TIME])
+        followers.append(i + 1)
+        kinds.append(kind)
+    return {"transition_time": (("transition",), np.array(times, dtype=float), {"units": "s", "long_name": "time"}),
+            "transition_follower": (("transition",), np.array(followers, dtype=np.int64),
+                                    {"units": "1", "long_name": "follower that switched"}),
+            "transition_kind": (("transition",), np.array(kinds, dtype=str),
+                                {"long_name": "stick, slip or reversal of the sliding velocity"})}
 
 
 def drum_brake() -> TwoFollowerRig:

@@ -8,7 +8,8 @@ guards) and system 6 the cam-follower with the cam as a rigid body on a driven s
 System 7 is the rocking follower on a flexible pivot bearing
 (:mod:`camdyn.model.flexible_pivot`, 8 states, the cam-follower's 3 guards and modes).
 System 9 is two rocking followers on one driven cam (:mod:`camdyn.model.two_followers`,
-11 states, the cam-follower's 3 guards and modes per follower); id 8 is reserved.
+11 states, per follower the cam-follower's 3 guards and mode, a stick flag and 2 stick
+guards); id 8 is reserved.
 """
 
 from __future__ import annotations
@@ -89,7 +90,7 @@ def transition(system, k, t, y, values, mode, p):
     if system == STICK_SLIP:
         stick_slip.transition(k, t, y, mode, p)
     elif system == TWO_FOLLOWERS:
-        pair.transition(k, values, mode)
+        pair.transition(k, t, y, values, mode, p)
     elif system == FLEXIBLE_PIVOT:
         pivot.transition(k, values, mode)
     else:

@@ -33,7 +33,7 @@ the cam as a rigid body on a driven shaft (:mod:`camdyn.model.driven_cam`, 8 sta
 cam-follower's 3 guards and modes); system 7 the rocking follower on a flexible pivot
 bearing (:mod:`camdyn.model.flexible_pivot`, 8 states, the same guards and modes);
 system 9 two rocking followers on one driven cam (:mod:`camdyn.model.two_followers`,
-11 states, the cam-follower's guards and modes per follower).
+11 states, per follower the cam-follower's guards and mode with a stick phase).
 
 A new model gets an id here (or, for a mechanism, in :mod:`camdyn.systems.mechanisms`)
 and a branch in each function; these two modules are the only ones that import the
