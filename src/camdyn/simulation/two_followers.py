@@ -198,8 +198,9 @@ def simulate_two_followers(system: System, drive: CamDrive, second: System | Non
         channels of :data:`camdyn.model.two_followers.CHANNELS`; over ``time``:
         :data:`SHAFT_STATE`, the shaft channels, ``contact_torque_total`` [N m] and
         ``speed_fluctuation`` [rad/s]; over ``transition``: the stick-slip switches
-        (``transition_time`` [s], ``transition_follower``, ``transition_kind``); attributes: the placement, the coefficient of speed
-        fluctuation, the mean speed and the solver counters.
+        (``transition_time`` [s], ``transition_follower``, ``transition_kind``);
+        attributes: the placement, the coefficient of speed fluctuation, the mean speed
+        and the solver counters.
 
     Raises
     ------
