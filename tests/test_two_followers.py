@@ -206,3 +206,43 @@ def test_bad_pairs_are_refused(friction_rig, impact_rig):
         simulate_two_followers(s, drive, placement=0.0)
     with pytest.raises(ParameterError, match="CamDrive"):
         simulate_two_followers(friction_rig, "motor", placement=0.0)
+
+
+def _statics(system, theta, alpha):
+    """Normal force [N] and the friction force [N] along u that holds the follower at
+    rest at ``alpha`` [rad] on a cam at rest at ``theta`` [rad]: its moment balance
+    ``0 = M_spring + Fn chi + F h`` about P, with the forces of the independent
+    :class:`camdyn.testing.oracle.ReferenceModel` (the friction left out: slip 0)."""
+    model = ReferenceModel(system, theta)
+    model.cam = lambda _t: (theta, 0.0)
+    acc, fn, _, _, _ = model.forces(0.0, [alpha, 0.0], True, 0.0, system.contact.reference_velocity)
+    h = 0.5 * system.follower.width + 2.0 * system.follower.pin_radius
+    return fn, -acc * system.follower.inertia / h
+
+
+@pytest.mark.parametrize("offset, sticks", [(-5e-7, True), (2e-7, False)])
+def test_a_follower_at_rest_on_a_still_cam_sticks_inside_the_friction_cone(friction_rig, offset, sticks):
+    # the cam held still (J = 1e9 kg m^2, no drive) and follower 1 at rest a little off
+    # its equilibrium: it sticks, and stays, while the friction statics needs is within
+    # mu_s Fn (F/Fn = -0.11 at -0.5 urad), and slides at once where it is not (0.48 > 0.4)
+    s = friction_rig.with_values(**{"environment.gravity": 0.0})
+    drive = CamDrive(shaft_inertia=1e9)
+    _, y0 = pack_two_followers(s, s, math.pi, drive, initial_speed=0.0, static_friction=0.4)
+    alpha = y0[0] + offset
+    fn, needed = _statics(s, y0[4], alpha)
+    assert (abs(needed) <= 0.4 * fn) == sticks
+    ds = simulate_two_followers(s, drive, placement=math.pi, duration=0.02, sample_rate=5e3, initial_speed=0.0,
+                                static_friction=0.4, initial_angles=(alpha, y0[2]))
+    first = ds.sel(follower=1)
+    if sticks:
+        assert (first.sticking.values == 1).all()
+        np.testing.assert_allclose(first.alpha.values, alpha, rtol=0, atol=1e-12)
+        # the holding force at each sampled state: the contact's stiffness (~3e6 N/rad)
+        # turns the 1e-14 rad the angle drifts by into 3e-8 N
+        statics = np.array([_statics(s, theta, a) for theta, a in zip(first.cam_angle.values, first.alpha.values)])
+        np.testing.assert_allclose(first.Fn.values, statics[:, 0], rtol=1e-9)
+        np.testing.assert_allclose(first.Ff.values, statics[:, 1], rtol=1e-9)
+        np.testing.assert_allclose(first.Ff.values, needed, rtol=1e-6)
+    else:
+        assert first.sticking.values[0] == 0
+        assert np.ptp(first.alpha.values) > 1e-9
