@@ -246,3 +246,40 @@ def test_a_follower_at_rest_on_a_still_cam_sticks_inside_the_friction_cone(frict
     else:
         assert first.sticking.values[0] == 0
         assert np.ptp(first.alpha.values) > 1e-9
+
+
+def test_a_stick_slip_cycle_keeps_the_switch_model_laws():
+    # the drum brake under a slow PI speed controller: the friction stops the cam, both
+    # contacts stick, the controller's integral winds the torque up until they break
+    # loose. While a contact sticks its sliding velocity stays zero and its friction
+    # inside mu_s Fn; while it slides (in contact) its friction is mu_k Fn exactly.
+    rig = drum_brake()
+    drive = CamDrive(shaft_inertia=2e-4, kind="controller", proportional=0.01, integral=0.5, target_speed=2.0)
+    ds = simulate_two_followers(rig.system, drive, second=rig.second, placement=rig.placement, duration=0.1,
+                                sample_rate=20e3, initial_speed=2.0, static_friction=0.4, rtol=1e-10, atol=1e-12)
+    kinds = ds.transition_kind.values
+    for k in (1, 2):
+        mine = kinds[ds.transition_follower.values == k]
+        assert (mine == "stick").sum() >= 3 and (mine == "slip").sum() >= 3
+        f = ds.sel(follower=k)
+        stuck = f.sticking.values == 1
+        sliding = ~stuck & (f.in_contact.values == 1)
+        assert stuck.sum() > 100 and sliding.sum() > 100
+        assert np.max(np.abs(f.sliding_velocity.values[stuck])) < 1e-12 * np.max(np.abs(f.sliding_velocity.values))
+        assert np.all(np.abs(f.Ff.values[stuck]) <= 0.4 * f.Fn.values[stuck] * (1 + 1e-12))
+        np.testing.assert_allclose(np.abs(f.Ff.values[sliding]), 0.3 * f.Fn.values[sliding], rtol=1e-12)
+    assert np.all(np.diff(ds.transition_time.values) >= 0)
+    assert ds.cam_speed.values.min() < 1e-2 * 2.0 < ds.cam_speed.values.max()   # it stops, then runs again
+
+
+def test_bad_static_friction_is_refused(friction_rig):
+    drive = CamDrive(shaft_inertia=1e-3)
+    with pytest.raises(ParameterError, match="must not be below the kinetic"):
+        simulate_two_followers(friction_rig, drive, placement=0.0, static_friction=0.1)
+    with pytest.raises(ParameterError, match="needs Coulomb friction"):
+        simulate_two_followers(friction_rig.with_values(**{"friction.law": "tanh"}), drive, placement=0.0,
+                               static_friction=0.5)
+    with pytest.raises(ParameterError, match="one or two finite"):
+        simulate_two_followers(friction_rig, drive, placement=0.0, static_friction=(0.4, 0.5, 0.6))
+    with pytest.raises(ParameterError, match="initial_angles"):
+        simulate_two_followers(friction_rig, drive, placement=0.0, initial_angles=(0.1,))
