@@ -32,7 +32,9 @@ force it needs inside the cone (else it slides on the other way).
 The mode vector holds per follower a cam-follower mode (:mod:`camdyn.model.layout`,
 ``MODE_*``) and a stick flag, ``MODE_EACH`` slots; the guards are, per follower
 (follower 1's first), the cam-follower's three (penetration, sliding velocity,
-penetration rate) and the stick's two (``mu_s Fn -+ F``).
+penetration rate), the stick's two (``mu_s Fn -+ F``) and the sprag margin
+(:func:`sprag_margin`), whose zeros are reported as events (the compliant contact lets
+the run go on through a self-locking phase, the normal force growing with the wedging).
 
 Parameter vector: the driven cam's (:mod:`camdyn.model.driven_cam`: follower 1's block
 and the drive's slots), the placement angle, each follower's ``mu_s``, the mode mirrored
@@ -50,7 +52,7 @@ from camdyn.model import driven_cam
 from camdyn.model import layout as L
 from camdyn.model.driven_cam import bearing_torque, contact_torque_parts, drive_torque
 from camdyn.model.dynamics import evaluate_cam, mode_expected_sign, mode_initial, mode_transition
-from camdyn.model.geometry import contact_rates_trig
+from camdyn.model.geometry import contact_kinematics_trig, contact_point_rate, contact_rates_trig
 
 PLACEMENT = driven_cam.SIZE + 0   # phi [rad]: follower 2's pivot rotated about E
 STATIC = driven_cam.SIZE + 1      # mu_s [-] of follower 1, then of follower 2 (Coulomb friction's stick)
@@ -59,10 +61,11 @@ MIRROR = driven_cam.SIZE + 3      # the current mode, mirrored for the guards (M
 FOLLOWERS = 2
 STATE_SIZE = 11
 CONTROLLED_SIZE = 7
-GUARDS_EACH = 5
+GUARDS_EACH = 6
 GUARD_COUNT = FOLLOWERS * GUARDS_EACH
-MODE_EACH = L.MODE_SIZE + 1       # a cam-follower mode and the stick flag
+MODE_EACH = L.MODE_SIZE + 2       # a cam-follower mode, the stick flag and the sprag margin's sign
 MODE_STICK = L.MODE_SIZE
+MODE_SPRAG = L.MODE_SIZE + 1      # +1 while the contact force's moment about P pushes the follower off, else -1
 MODE_SIZE = FOLLOWERS * MODE_EACH
 SECOND = MIRROR + MODE_SIZE       # first slot of follower 2's block
 SIZE = SECOND + L.SIZE
@@ -232,9 +235,11 @@ def guards(t, y, f, known, p, values, rates):
     ``f`` are not ``known``; and, for the stick, ``mu_s Fn - F`` and ``mu_s Fn + F`` [N]
     (``F`` the friction that holds it in the current mode, which the guards do not
     receive: :func:`transition` mirrors it into the ``MIRROR`` slots of ``p``; their
-    rates are left NaN: the driver then brackets them at the step's midpoint)."""
+    rates are left NaN: the driver then brackets them at the step's midpoint); and the
+    sprag margin ``chi + mu_k s h`` [m] (:func:`sprag_margin`) with its exact rate."""
     theta_ddot = f[5] if known else math.nan
-    held = accelerations(y, p[MIRROR:MIRROR + MODE_SIZE], p)
+    mirrored = p[MIRROR:MIRROR + MODE_SIZE]
+    held = accelerations(y, mirrored, p)
     for i in range(FOLLOWERS):
         alpha_ddot = f[2 * i + 1] if known else math.nan
         theta = frame_angle(i, y[4], p)
@@ -253,6 +258,26 @@ def guards(t, y, f, known, p, values, rates):
         rates[k + 2] = delta_ddot
         rates[k + 3] = math.nan
         rates[k + 4] = math.nan
+        values[k + 5], rates[k + 5] = sprag_margin(i, y, mirrored, p)
+
+
+@numba.njit(cache=True)
+def sprag_margin(i, y, mode, p):
+    """Follower ``i``'s sprag margin [m] and its rate [m/s]: the moment arm about P of its
+    contact force per unit normal force, ``chi + mu_k s h`` (the clockwise moment
+    ``Fn chi + Ff h`` of eq 3.16 with ``Ff = mu_k s Fn``, ``s`` the sliding sign of the
+    mode). Positive, the contact force turns the follower away from the cam; where it
+    reaches zero the force's line of action passes through the pivot and beyond it
+    friction wedges the follower into the cam (self-locking, sprag-slip: Spurr 1961,
+    doi:10.1243/PIME_AUTO_1961_000_009_02). The rate is ``chi_dot``
+    (:func:`camdyn.model.geometry.contact_point_rate`)."""
+    q = block(i, p)
+    theta = frame_angle(i, y[4], p)
+    alpha = y[2 * i]
+    chi = contact_kinematics_trig(math.cos(alpha), math.sin(alpha), math.cos(theta), math.sin(theta), 0.0, 0.0,
+                                  q)[2]
+    slip = mode[i * MODE_EACH + L.MODE_SLIP]
+    return chi + q[L.MU] * slip * q[L.OFFSET], contact_point_rate(alpha, y[2 * i + 1], theta, y[5], q)
 
 
 @numba.njit(cache=True)
@@ -264,6 +289,9 @@ def expected_sign(k, mode, p):
     local = k - GUARDS_EACH * i
     m = follower_mode(i, mode)
     stuck = mode[i * MODE_EACH + MODE_STICK] > 0.5
+    if local == 5:
+        sliding = m[L.MODE_CONTACT] > 0.5 and not stuck and block(i, p)[L.FRICTION_LAW] == 1.0
+        return mode[i * MODE_EACH + MODE_SPRAG] if sliding else 0.0
     if local >= 3:
         return 1.0 if stuck and m[L.MODE_CONTACT] > 0.5 else 0.0
     if local == 1 and stuck:
@@ -298,20 +326,26 @@ def transition(k, t, y, values, mode, p):
     velocity, where it sticks if it can (:func:`can_stick`; its velocity is then set
     so that ``vr = 0`` exactly, a correction at the event's rounding) and otherwise
     slides on the other way; from a stick it slides forward (``F`` reached ``mu_s Fn``:
-    the cam outruns it, ``vr > 0``) or backward."""
+    the cam outruns it, ``vr > 0``) or backward. A sprag margin's zero flips its sign's
+    flag only (the event is the report); every other switch sets the flag afresh."""
     i = k // GUARDS_EACH
     local = k - GUARDS_EACH * i
     m = follower_mode(i, mode)
+    if local == 5:
+        mode[i * MODE_EACH + MODE_SPRAG] = -mode[i * MODE_EACH + MODE_SPRAG]
+        p[MIRROR:MIRROR + MODE_SIZE] = mode
+        return
     if local == 3 or local == 4:
         m[L.MODE_SLIP] = 1.0 if local == 3 else -1.0
         set_stuck(i, False, mode, p)
-        return
-    if local == 1 and can_stick(i, y, mode, p):
+    elif local == 1 and can_stick(i, y, mode, p):
         set_stuck(i, True, mode, p)
         hold_sliding_velocity(i, y, p)
-        return
-    mode_transition(local, values[GUARDS_EACH * i:GUARDS_EACH * i + 3], m)
-    set_stuck(i, mode[i * MODE_EACH + MODE_STICK] > 0.5 and m[L.MODE_CONTACT] > 0.5, mode, p)
+    else:
+        mode_transition(local, values[GUARDS_EACH * i:GUARDS_EACH * i + 3], m)
+        set_stuck(i, mode[i * MODE_EACH + MODE_STICK] > 0.5 and m[L.MODE_CONTACT] > 0.5, mode, p)
+    mode[i * MODE_EACH + MODE_SPRAG] = 1.0 if sprag_margin(i, y, mode, p)[0] >= 0.0 else -1.0
+    p[MIRROR:MIRROR + MODE_SIZE] = mode
 
 
 @numba.njit(cache=True)
@@ -341,6 +375,9 @@ def initial_mode(t, y, p, mode):
     for i in range(FOLLOWERS):
         if values[GUARDS_EACH * i + 1] == 0.0 and can_stick(i, y, mode, p):
             set_stuck(i, True, mode, p)
+    for i in range(FOLLOWERS):
+        mode[i * MODE_EACH + MODE_SPRAG] = 1.0 if sprag_margin(i, y, mode, p)[0] >= 0.0 else -1.0
+    p[MIRROR:MIRROR + MODE_SIZE] = mode
 
 
 @numba.njit(cache=True)
@@ -374,6 +411,7 @@ CHANNELS = (
     ("penetration", "m", "contact penetration delta (negative: gap)"),
     ("in_contact", "1", "1 while the follower touches the cam"),
     ("sticking", "1", "1 while the contact sticks"),
+    ("sprag_margin", "m", "moment arm about the pivot of the contact force per unit normal force, chi + mu_k s h"),
 )
 #: name, unit, long name of each shaft channel of :func:`channels`, after the followers'.
 SHAFT_CHANNELS = (
@@ -411,4 +449,5 @@ def channels(y, modes, p):
             row[5] = kin[0]
             row[6] = modes[r, i * MODE_EACH + L.MODE_CONTACT]
             row[7] = modes[r, i * MODE_EACH + MODE_STICK]
+            row[8] = sprag_margin(i, y[r], modes[r], p)[0]
     return per, shaft

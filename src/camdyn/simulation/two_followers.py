@@ -197,10 +197,10 @@ def simulate_two_followers(system: System, drive: CamDrive, second: System | Non
         Over ``time`` and ``follower`` (1, 2): :data:`PER_FOLLOWER_STATE` and the
         channels of :data:`camdyn.model.two_followers.CHANNELS`; over ``time``:
         :data:`SHAFT_STATE`, the shaft channels, ``contact_torque_total`` [N m] and
-        ``speed_fluctuation`` [rad/s]; over ``transition``: the stick-slip switches
+        ``speed_fluctuation`` [rad/s]; over ``transition``: the stick-slip and sprag switches
         (``transition_time`` [s], ``transition_follower``, ``transition_kind``);
-        attributes: the placement, the coefficient of speed fluctuation, the mean speed
-        and the solver counters.
+        attributes: the placement, the coefficient of speed fluctuation, the mean speed,
+        the counts of sticks and sprags, and the solver counters.
 
     Raises
     ------
@@ -233,7 +233,10 @@ def simulate_two_followers(system: System, drive: CamDrive, second: System | Non
     mean = float(np.mean(y[:, 5]))
     data["speed_fluctuation"] = (("time",), y[:, 5] - mean, {"units": "rad/s", "long_name": "cam speed less its mean"})
     sticking = [name for name, *_ in pair.CHANNELS].index("sticking")
-    data.update(_transitions(events, t, per[:, :, sticking]))
+    switches = _transitions(events, t, per[:, :, sticking])
+    data.update(switches)
+    attrs.update(sticks=int(np.sum(switches["transition_kind"][1] == "stick")),
+                 sprags=int(np.sum(switches["transition_kind"][1] == "sprag")))
     attrs.update(placement=float(p[pair.PLACEMENT]), mean_cam_speed=mean,
                  coefficient_of_fluctuation=speed_fluctuation(y[:, 5]), drive_kind=drive.kind,
                  shaft_inertia=drive.shaft_inertia)
@@ -247,15 +250,19 @@ def _transitions(events: np.ndarray, t: np.ndarray, sticking: np.ndarray) -> dic
     time [s], follower (1, 2) and kind: ``"slip"``, a stick that broke (a stick guard);
     at a zero of the sliding velocity, ``"stick"`` if the follower's next switch is a
     stick that breaks (or, with none, if it still sticks at the first sample after),
-    else ``"reversal"`` (it slid through). ``sticking`` (n, 2) is the sampled flag."""
+    else ``"reversal"`` (it slid through); ``"sprag"`` and ``"sprag-end"`` where the
+    sprag margin (:func:`camdyn.model.two_followers.sprag_margin`) turns negative
+    (self-locking begins) and positive again. ``sticking`` (n, 2) is the sampled flag."""
     from camdyn.integrator import driver
 
     guard = events[:, driver.EVENT_GUARD].astype(int)
     follower, local = np.divmod(guard, pair.GUARDS_EACH)
     times, followers, kinds = [], [], []
-    for row in np.nonzero(np.isin(local, (1, 3, 4)))[0]:
+    for row in np.nonzero(np.isin(local, (1, 3, 4, 5)))[0]:
         i = follower[row]
-        if local[row] != 1:
+        if local[row] == 5:
+            kind = "sprag" if events[row, driver.EVENT_NEW_SIGN] < 0 else "sprag-end"
+        elif local[row] != 1:
             kind = "slip"
         else:
             later = np.nonzero((follower[row + 1:] == i) & np.isin(local[row + 1:], (0, 1, 3, 4)))[0]
@@ -271,7 +278,7 @@ def _transitions(events: np.ndarray, t: np.ndarray, sticking: np.ndarray) -> dic
             "transition_follower": (("transition",), np.array(followers, dtype=np.int64),
                                     {"units": "1", "long_name": "follower that switched"}),
             "transition_kind": (("transition",), np.array(kinds, dtype=str),
-                                {"long_name": "stick, slip or reversal of the sliding velocity"})}
+                                {"long_name": "stick, slip, reversal, sprag or sprag-end"})}
 
 
 def drum_brake() -> TwoFollowerRig:
