@@ -19,6 +19,7 @@ Jobs (default: all but the slow ones):
 - ``siconos``: ``python examples/siconos_comparison.py`` -> siconos_camfollower.png (from
   tests/data/siconos_camfollower.json);
 - ``flexible_pivot``: ``python examples/flexible_pivot.py`` -> flexible_pivot_resonance.png;
+- ``two_followers``: ``python examples/two_followers.py`` -> two_followers_stick_slip.png;
 - slow (``--slow``, about 26 minutes more): ``friction_tables``, ``impact_tables``,
   ``gallery`` (the rest of chapter 2) and ``translating`` (the bifurcation diagram of the
   translating follower's rig, translating_bifurcation.png). The first three also rewrite
@@ -67,6 +68,7 @@ SOURCES = {
     "stick_slip_cycle.png": "python examples/mechanisms.py",
     "siconos_camfollower.png": "python examples/siconos_comparison.py",
     "flexible_pivot_resonance.png": "python examples/flexible_pivot.py",
+    "two_followers_stick_slip.png": "python examples/two_followers.py",
     "translating_bifurcation.png": "python examples/translating_bifurcation.py",
     "friction_errors.png": "python examples/friction_error_tables.py",
     "impact_hysteresis.png": "python examples/impact_damping_tables.py",
@@ -212,7 +214,8 @@ JOBS = {"demo": job_demo, "sweeps": job_sweeps, "fig2_9": job_fig2_9,
         "mechanisms": _script("mechanisms.py", ("mechanisms_speed_fluctuation.png", "stick_slip_cycle.png"),
                               data=True),
         "siconos": _script("siconos_comparison.py", ("siconos_camfollower.png",), data=True),
-        "flexible_pivot": _script("flexible_pivot.py", ("flexible_pivot_resonance.png",), data=True)}
+        "flexible_pivot": _script("flexible_pivot.py", ("flexible_pivot_resonance.png",), data=True),
+        "two_followers": _script("two_followers.py", ("two_followers_stick_slip.png",), data=True)}
 SLOW = {"friction_tables": _script("friction_error_tables.py", ("friction_errors.png",), data=True),
         "impact_tables": _script("impact_damping_tables.py",
                                  ("impact_hysteresis.png", "impact_residue_landscape.png", "restitution_fit.png")),
