@@ -268,8 +268,8 @@ def sprag_margin(i, y, mode, p):
     ``Fn chi + Ff h`` of eq 3.16 with ``Ff = mu_k s Fn``, ``s`` the sliding sign of the
     mode). Positive, the contact force turns the follower away from the cam; where it
     reaches zero the force's line of action passes through the pivot and beyond it
-    friction wedges the follower into the cam (self-locking, sprag-slip: Spurr 1961,
-    doi:10.1243/PIME_AUTO_1961_000_009_02). The rate is ``chi_dot``
+    friction wedges the follower into the cam (self-locking, sprag-slip: Spurr, "A theory
+    of brake squeal", Proc. IMechE Automobile Division, 1961). The rate is ``chi_dot``
     (:func:`camdyn.model.geometry.contact_point_rate`)."""
     q = block(i, p)
     theta = frame_angle(i, y[4], p)
