@@ -283,3 +283,22 @@ def test_bad_static_friction_is_refused(friction_rig):
         simulate_two_followers(friction_rig, drive, placement=0.0, static_friction=(0.4, 0.5, 0.6))
     with pytest.raises(ParameterError, match="initial_angles"):
         simulate_two_followers(friction_rig, drive, placement=0.0, initial_angles=(0.1,))
+
+
+def test_the_sprag_margin_is_the_contact_force_lever_about_the_pivot():
+    # chi + mu_k s h from the reference model's independent geometry, on the drum brake
+    # turning backwards (s = -1: the margin is chi - mu_k h); no sprag at mu_k = 0.3
+    rig = drum_brake()
+    ds = simulate_two_followers(rig.system, CamDrive(shaft_inertia=1e-2), second=rig.second,
+                                placement=rig.placement, duration=0.01, sample_rate=20e3, initial_speed=-5.0)
+    s = rig.system
+    h = 0.5 * s.follower.width + 2.0 * s.follower.pin_radius
+    for k, shift in ((1, 0.0), (2, rig.placement)):
+        f = ds.sel(follower=k)
+        touching = f.in_contact.values == 1
+        assert touching.sum() > 10 and np.all(f.sliding_velocity.values[touching] < 0)
+        model = ReferenceModel(s, 0.0)
+        chi = np.array([model.geometry_at(th - shift, w, a, ad)[2] for th, w, a, ad in
+                        zip(ds.cam_angle.values, ds.cam_speed.values, f.alpha.values, f.alpha_dot.values)])
+        np.testing.assert_allclose(f.sprag_margin.values[touching], (chi - 0.3 * h)[touching], rtol=1e-12)
+    assert ds.attrs["sprags"] == 0
