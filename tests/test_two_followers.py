@@ -302,3 +302,54 @@ def test_the_sprag_margin_is_the_contact_force_lever_about_the_pivot():
                         zip(ds.cam_angle.values, ds.cam_speed.values, f.alpha.values, f.alpha_dot.values)])
         np.testing.assert_allclose(f.sprag_margin.values[touching], (chi - 0.3 * h)[touching], rtol=1e-12)
     assert ds.attrs["sprags"] == 0
+
+
+def test_the_first_stick_comes_when_an_independent_solution_stops_sliding():
+    # the figure's run up to its first switch: both contacts slide forward (s = +1) while
+    # friction brakes the cam; the equations written again on the reference model with
+    # Coulomb friction and the PI controller, integrated by SciPy to the first zero of a
+    # sliding velocity, give the time and the follower of camdyn's first stick event
+    rig = drum_brake()
+    drive = CamDrive(shaft_inertia=2e-4, kind="controller", proportional=0.01, integral=0.5, target_speed=2.0)
+    ds = simulate_two_followers(rig.system, drive, second=rig.second, placement=rig.placement, duration=0.01,
+                                sample_rate=20e3, initial_speed=2.0, static_friction=0.4, rtol=1e-10, atol=1e-12)
+    p, y0 = pack_two_followers(rig.system, rig.second, rig.placement, drive, initial_speed=2.0,
+                               static_friction=0.4)
+    s, phi = rig.system, rig.placement
+    models = (ReferenceModel(s, y0[4], p[L.VISCOUS_C]), ReferenceModel(s, y0[4] - phi, p[pair.SECOND + L.VISCOUS_C]))
+    shifts = (0.0, phi)
+
+    def rhs(t, y):
+        theta, theta_dot = y[4], y[5]
+        out = [0.0] * 7
+        torque = drive.proportional * (drive.target_speed - theta_dot) + drive.integral * y[6]
+        for i, model in enumerate(models):
+            th = theta - shifts[i]
+            model.cam = lambda _t, th=th: (th, theta_dot)
+            acc, fn, ff, _, _ = model.forces(t, [y[2 * i], y[2 * i + 1]], True, 1.0, s.contact.reference_velocity)
+            *_, arm, n, u = model.geometry_at(th, 1.0, y[2 * i], y[2 * i + 1])
+            torque += fn * (n @ arm) - ff * (u @ arm)
+            out[2 * i], out[2 * i + 1] = y[2 * i + 1], acc
+        out[4], out[5], out[6] = theta_dot, torque / drive.shaft_inertia, drive.target_speed - theta_dot
+        return out
+
+    def sliding(i):
+        def event(t, y):
+            return models[i].geometry_at(y[4] - shifts[i], y[5], y[2 * i], y[2 * i + 1])[4]
+        event.terminal, event.direction = True, -1
+        return event
+
+    def touching(i):
+        def event(t, y):
+            return models[i].geometry_at(y[4] - shifts[i], y[5], y[2 * i], y[2 * i + 1])[0]
+        event.terminal = True
+        return event
+
+    sol = solve_ivp(rhs, (0.0, 0.01), [*y0[:6], 0.0], method="DOP853", rtol=1e-12, atol=1e-14,
+                    events=[sliding(0), sliding(1), touching(0), touching(1)])
+    hits = [(e[0], k) for k, e in enumerate(sol.t_events) if e.size]
+    t_stop, which = min(hits)
+    assert which in (0, 1)   # a sliding velocity reaches zero before any contact opens
+    first = int(np.argmax(ds.transition_kind.values == "stick"))
+    assert first == 0 and ds.transition_follower.values[0] == which + 1
+    assert ds.transition_time.values[0] == pytest.approx(t_stop, abs=1e-9)
