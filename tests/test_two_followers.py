@@ -353,3 +353,66 @@ def test_the_first_stick_comes_when_an_independent_solution_stops_sliding():
     first = int(np.argmax(ds.transition_kind.values == "stick"))
     assert first == 0 and ds.transition_follower.values[0] == which + 1
     assert ds.transition_time.values[0] == pytest.approx(t_stop, abs=1e-9)
+
+
+def test_a_stuck_pair_breaks_loose_when_an_independent_solution_leaves_the_cone(friction_rig):
+    # cam and followers at rest, both contacts stuck, a PI controller starting the cam:
+    # the followers roll with it until the friction one of them needs reaches mu_s Fn.
+    # The test writes the stuck phase again as a constrained system on the reference
+    # model: M q'' = f - G^T F, G q'' = -c0 (vr = -h alpha_i' + w_i Theta' held at zero;
+    # c0, the part of vr' at zero accelerations, by a central difference in time), solved
+    # by numpy, integrated by SciPy to the first |F_i| = mu_s Fn_i
+    s = friction_rig.with_values(**{"environment.gravity": 0.0})
+    second = s.with_values(**{"spring.stiffness": 0.8 * s.spring.stiffness})
+    drive = CamDrive(shaft_inertia=2e-4, kind="controller", proportional=0.02, integral=2.0, target_speed=1.0)
+    ds = simulate_two_followers(s, drive, second=second, placement=math.pi, duration=0.05, sample_rate=20e3,
+                                initial_speed=0.0, static_friction=0.4, rtol=1e-10, atol=1e-12)
+    p, y0 = pack_two_followers(s, second, math.pi, drive, initial_speed=0.0, static_friction=0.4)
+    models = (ReferenceModel(s, y0[4], p[L.VISCOUS_C]), ReferenceModel(second, y0[4] - math.pi,
+                                                                       p[pair.SECOND + L.VISCOUS_C]))
+    shifts = (0.0, math.pi)
+    h = 0.5 * s.follower.width + 2.0 * s.follower.pin_radius
+
+    def stuck(t, y):
+        """Accelerations (alpha_1'', alpha_2'', Theta''), friction forces and normal forces."""
+        theta, theta_dot = y[4], y[5]
+        mass = np.diag([s.follower.inertia, second.follower.inertia, drive.shaft_inertia])
+        force = np.zeros(3)
+        force[2] = drive.proportional * (drive.target_speed - theta_dot) + drive.integral * y[6]
+        g, c0, fns = np.zeros((2, 3)), np.zeros(2), np.zeros(2)
+        for i, model in enumerate(models):
+            th = theta - shifts[i]
+            model.cam = lambda _t, th=th: (th, theta_dot)
+            acc, fns[i], _, _, _ = model.forces(t, [y[2 * i], y[2 * i + 1]], True, 0.0,
+                                                model.s.contact.reference_velocity)
+            *_, arm, n, u = model.geometry_at(th, 1.0, y[2 * i], y[2 * i + 1])
+            force[i] = acc * model.s.follower.inertia
+            force[2] += fns[i] * (n @ arm)
+            g[i, i], g[i, 2] = -h, u @ arm
+            dt = 1e-7
+
+            def vr(sign, i=i, th=th):
+                return models[i].geometry_at(th + sign * dt * theta_dot, theta_dot,
+                                             y[2 * i] + sign * dt * y[2 * i + 1], y[2 * i + 1])[4]
+            c0[i] = (vr(1) - vr(-1)) / (2 * dt)
+        kkt = np.block([[mass, g.T], [g, np.zeros((2, 2))]])
+        solution = np.linalg.solve(kkt, np.r_[force, -c0])
+        return solution[:3], solution[3:], fns
+
+    def rhs(t, y):
+        acc, _, _ = stuck(t, y)
+        return [y[1], acc[0], y[3], acc[1], y[5], acc[2], drive.target_speed - y[5]]
+
+    def cone(i):
+        def event(t, y):
+            _, friction, fns = stuck(t, y)
+            return 0.4 * fns[i] - abs(friction[i])
+        event.terminal, event.direction = True, -1
+        return event
+
+    sol = solve_ivp(rhs, (0.0, 0.05), [*y0[:6], 0.0], method="DOP853", rtol=1e-12, atol=1e-14,
+                    events=[cone(0), cone(1)])
+    t_break, which = min((e[0], k) for k, e in enumerate(sol.t_events) if e.size)
+    assert (ds.sticking.values[0] == 1).all() and ds.transition_kind.values[0] == "slip"
+    assert ds.transition_follower.values[0] == which + 1
+    assert ds.transition_time.values[0] == pytest.approx(t_break, abs=1e-9), ds.transition_time.values[0] - t_break
