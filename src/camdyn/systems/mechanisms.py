@@ -7,6 +7,9 @@ guards) and system 6 the cam-follower with the cam as a rigid body on a driven s
 (:mod:`camdyn.model.driven_cam`, 8 states, the cam-follower's 3 guards and modes).
 System 7 is the rocking follower on a flexible pivot bearing
 (:mod:`camdyn.model.flexible_pivot`, 8 states, the cam-follower's 3 guards and modes).
+System 9 is two rocking followers on one driven cam (:mod:`camdyn.model.two_followers`,
+11 states, per follower the cam-follower's 3 guards and mode, a stick flag and 2 stick
+guards); id 8 is reserved.
 """
 
 from __future__ import annotations
@@ -16,10 +19,12 @@ import numba
 from camdyn.model import driven_cam, stick_slip
 from camdyn.model import flexible_pivot as pivot
 from camdyn.model import layout as L
+from camdyn.model import two_followers as pair
 
 STICK_SLIP = 5
 DRIVEN_CAM = 6
 FLEXIBLE_PIVOT = 7
+TWO_FOLLOWERS = 9
 
 @numba.njit(cache=True)
 def sizes(system):
@@ -28,6 +33,8 @@ def sizes(system):
         return stick_slip.STATE_SIZE, 2, stick_slip.GUARD_COUNT, 1
     if system == FLEXIBLE_PIVOT:
         return pivot.STATE_SIZE, pivot.CONTROLLED_SIZE, pivot.GUARD_COUNT, L.MODE_SIZE
+    if system == TWO_FOLLOWERS:
+        return pair.STATE_SIZE, pair.CONTROLLED_SIZE, pair.GUARD_COUNT, pair.MODE_SIZE
     return driven_cam.STATE_SIZE, driven_cam.CONTROLLED_SIZE, driven_cam.GUARD_COUNT, L.MODE_SIZE
 
 
@@ -35,6 +42,8 @@ def sizes(system):
 def rhs(system, t, y, mode, p, dydt):
     if system == STICK_SLIP:
         stick_slip.rhs(t, y, mode, p, dydt)
+    elif system == TWO_FOLLOWERS:
+        pair.rhs(t, y, mode, p, dydt)
     elif system == FLEXIBLE_PIVOT:
         pivot.rhs(t, y, mode, p, dydt)
     else:
@@ -45,6 +54,8 @@ def rhs(system, t, y, mode, p, dydt):
 def jacobian(system, t, y, f0, mode, p, jac):
     if system == STICK_SLIP:
         stick_slip.jacobian(t, y, mode, p, jac)
+    elif system == TWO_FOLLOWERS:
+        pair.jacobian(t, y, mode, p, jac)
     elif system == FLEXIBLE_PIVOT:
         pivot.jacobian(t, y, mode, p, jac)
     else:
@@ -55,6 +66,8 @@ def jacobian(system, t, y, f0, mode, p, jac):
 def guards(system, t, y, f, known, p, values, rates):
     if system == STICK_SLIP:
         stick_slip.guards(t, y, f, known, p, values, rates)
+    elif system == TWO_FOLLOWERS:
+        pair.guards(t, y, f, known, p, values, rates)
     elif system == FLEXIBLE_PIVOT:
         pivot.guards(t, y, f, known, p, values, rates)
     else:
@@ -65,6 +78,8 @@ def guards(system, t, y, f, known, p, values, rates):
 def expected_sign(system, k, mode, p):
     if system == STICK_SLIP:
         return stick_slip.expected_sign(k, mode, p)
+    if system == TWO_FOLLOWERS:
+        return pair.expected_sign(k, mode, p)
     if system == FLEXIBLE_PIVOT:
         return pivot.expected_sign(k, mode, p)
     return driven_cam.expected_sign(k, mode, p)
@@ -74,6 +89,8 @@ def expected_sign(system, k, mode, p):
 def transition(system, k, t, y, values, mode, p):
     if system == STICK_SLIP:
         stick_slip.transition(k, t, y, mode, p)
+    elif system == TWO_FOLLOWERS:
+        pair.transition(k, t, y, values, mode, p)
     elif system == FLEXIBLE_PIVOT:
         pivot.transition(k, values, mode)
     else:
@@ -84,6 +101,8 @@ def transition(system, k, t, y, values, mode, p):
 def initial_mode(system, t, y, p, mode):
     if system == STICK_SLIP:
         stick_slip.initial_mode(t, y, p, mode)
+    elif system == TWO_FOLLOWERS:
+        pair.initial_mode(t, y, p, mode)
     elif system == FLEXIBLE_PIVOT:
         pivot.initial_mode(t, y, p, mode)
     else:
@@ -93,18 +112,22 @@ def initial_mode(system, t, y, p, mode):
 @numba.njit(cache=True)
 def regime(system, mode, p):
     """Sticking and slipping (stick-slip), free flight and contact (driven cam, flexible
-    pivot)."""
+    pivot, two followers: either in contact)."""
     if system == STICK_SLIP:
         return 0 if mode[0] == 0.0 else 1
+    if system == TWO_FOLLOWERS:
+        return pair.regime(mode)
     return 1 if mode[L.MODE_CONTACT] > 0.5 else 0
 
 
 @numba.njit(cache=True)
 def monitor(system, t, y, mode, p):
     """The extension ``|x|`` [m] (stick-slip); an impact's normal force [N] (driven cam,
-    flexible pivot)."""
+    flexible pivot, two followers)."""
     if system == STICK_SLIP:
         return abs(y[0])
     if system == FLEXIBLE_PIVOT:
         return pivot.monitor(t, y, mode, p)
+    if system == TWO_FOLLOWERS:
+        return pair.monitor(t, y, mode, p)
     return driven_cam.monitor(t, y, mode, p)

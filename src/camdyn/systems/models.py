@@ -31,7 +31,9 @@ them there in its first lines: system 5 is the stick-slip oscillator
 (:mod:`camdyn.model.stick_slip`, 3 states, 3 guards) and system 6 the cam-follower with
 the cam as a rigid body on a driven shaft (:mod:`camdyn.model.driven_cam`, 8 states, the
 cam-follower's 3 guards and modes); system 7 the rocking follower on a flexible pivot
-bearing (:mod:`camdyn.model.flexible_pivot`, 8 states, the same guards and modes).
+bearing (:mod:`camdyn.model.flexible_pivot`, 8 states, the same guards and modes);
+system 9 two rocking followers on one driven cam (:mod:`camdyn.model.two_followers`,
+11 states, per follower the cam-follower's guards and mode with a stick phase).
 
 A new model gets an id here (or, for a mechanism, in :mod:`camdyn.systems.mechanisms`)
 and a branch in each function; these two modules are the only ones that import the
@@ -59,6 +61,7 @@ TRANSLATING_FOLLOWER = 4
 STICK_SLIP = mechanisms.STICK_SLIP
 DRIVEN_CAM = mechanisms.DRIVEN_CAM
 FLEXIBLE_PIVOT = mechanisms.FLEXIBLE_PIVOT
+TWO_FOLLOWERS = mechanisms.TWO_FOLLOWERS
 
 
 @numba.njit(cache=True)

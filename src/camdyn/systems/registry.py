@@ -25,11 +25,13 @@ from camdyn.systems.models import (
     RIGID_IMPACT,
     STICK_SLIP,
     TRANSLATING_FOLLOWER,
+    TWO_FOLLOWERS,
 )
 from camdyn.systems.variational import PARAMETRIC, VARIATIONAL
 
 __all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", "TRANSLATING_FOLLOWER", "STICK_SLIP",
-           "DRIVEN_CAM", "FLEXIBLE_PIVOT", "VARIATIONAL", "PARAMETRIC", "state_size", "controlled_size",
+           "DRIVEN_CAM", "FLEXIBLE_PIVOT", "TWO_FOLLOWERS",
+           "VARIATIONAL", "PARAMETRIC", "state_size", "controlled_size",
            "guard_count", "mode_size", "rhs", "rhs_inline", "jacobian", "guards",
            "expected_sign", "transition", "initial_mode", "regime", "preferred_method", "monitor"]
 
