@@ -32,6 +32,12 @@ from camdyn.params.system import System
 
 __all__ = ["CurvePoint", "Curve", "bifurcation_curve", "system_curve"]
 
+#: Smallest arclength step of the short branches (scaled units) [-]: where a branch ends
+#: at a loss of contact (no orbit past it) the step halves down to it before the end is
+#: placed by the secant of the smallest normal force.
+END_STEP = 1e-4
+#: Most orbits on one short branch.
+MAX_POINTS = 120
 #: Kinds a curve can follow (Neimark-Sacker and sliding reversal are not offered).
 CURVE_KINDS = ("fold", "period-doubling", "grazing", "contact-loss")
 
@@ -113,7 +119,8 @@ def _locate(problem: Problem, kind: str, centre: float, window: float, start, pe
         orbit = None
     if orbit is None:
         orbit = find_orbit(problem, value=low, periods=periods, transient=transient)
-    branch = continue_orbits(problem, orbit, centre + window, step=step, max_step=max(step, 0.05), max_points=400)
+    branch = continue_orbits(problem, orbit, centre + window, step=step, min_step=min(step, END_STEP),
+                             max_step=max(step, 0.05), max_points=MAX_POINTS)
     found = [b for b in branch.bifurcations if b.kind == kind]
     if not found:
         return None
