@@ -146,3 +146,13 @@ def test_bad_input_is_one_line_with_status_2(argv, match):
     status, out, err = run("simulate", EXAMPLE, "--revolutions", "1", *argv)
     assert status == 2
     assert len(err.strip().splitlines()) == 1 and match in err
+
+
+def test_presets_show_writes_a_file_and_refuses_a_profile(tmp_path):
+    plain = tmp_path / "plain.toml"
+    plain.write_text(config.preset_text("sundar2014-friction"), encoding="utf-8")
+    status, out, err = run("presets", "show", plain)
+    assert status == 0, err
+    assert config.system_from_toml(out) == config.load_system("sundar2014-friction")
+    status, out, err = run("presets", "show", EXAMPLE)
+    assert status == 2 and len(err.strip().splitlines()) == 1 and "cannot be written back" in err
