@@ -80,7 +80,8 @@ def test_a_csv_table_profile(tmp_path):
     theta = np.linspace(0.0, 2 * math.pi, 997)
     s = profile.lift(theta)[0]
     bound = 5 / 384 * math.radians(5.0) ** 4 * ecc
-    assert np.max(np.abs(s - ecc * (1 + np.cos(theta)))) < bound + 1e-14
+    error = np.max(np.abs(s - ecc * (1 + np.cos(theta))))
+    assert bound / 100 < error < bound  # measured 2.6e-10 m against 1.3e-9 m
 
 
 def test_overrides_of_scalar_profile_keys():
