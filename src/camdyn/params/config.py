@@ -12,6 +12,12 @@ unit it is stored in (SI). The keys, units and meanings are declared once, on th
 of the dataclasses of :mod:`camdyn.params.system` (see :mod:`camdyn.params.schema`);
 :data:`SCHEMA`, :func:`build_system` and :func:`system_to_toml` are derived from them.
 Presets are such files shipped in ``camdyn/params/presets``.
+
+A ``[profile]`` table (:data:`PROFILE_KEYS`, a translating follower's profile keys)
+replaces the ellipse by a cam profile: :func:`read_system` returns its keys in SI units
+beside the system, and :func:`camdyn.io.system_config.load_system` builds the profile
+(this layer knows no cam model); :func:`load_system`, :func:`system_from_toml` and
+:func:`system_to_toml` handle the ellipse only and refuse a profile.
 """
 
 from __future__ import annotations
