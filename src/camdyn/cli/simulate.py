@@ -42,7 +42,7 @@ def presets_show(name: str):
     if name in list_translating_presets():
         typer.echo(translating_preset_text(name))
         return
-    typer.echo(preset_text(name) if name in list_presets() else system_to_toml(load_source(name)))
+    typer.echo(preset_text(name) if name in list_presets() else system_to_toml(load_source(name, None)))
 
 
 def presets_keys():

@@ -42,7 +42,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyError
-from camdyn.params.profiles import TranslatingSpec, spec_from_table
+from camdyn.params.profile_table import profile_spec
+from camdyn.params.profiles import TranslatingSpec
 from camdyn.params.units import parse_quantity
 
 __all__ = ["ROCKING", "SCHEMA", "LIFT_DIRECTIONS", "RockingSpec", "read_rocking", "rocking_spec_from_table"]
@@ -133,25 +134,6 @@ def _value(key: str, raw, unit: str):
     return value
 
 
-def _profile_spec(flat: dict, face: str, roller_radius: float, name: str, folder: Path | None) -> TranslatingSpec:
-    """The profile and motion through the translating follower's reader: its follower is
-    the one the profile was made for, its dynamics placeholders."""
-    made_for = str(flat.get("profile.face", "flat"))
-    table = {key: value for key, value in flat.items() if key.startswith(_PASSED)
-             and key not in ("profile.face", "profile.offset")}
-    table.update({"follower.kind": "translating", "follower.face": made_for, "follower.mass": "1 kg",
-                  "spring.stiffness": "0 N/m", "spring.preload": "0 N"})
-    if "profile.offset" in flat:
-        table["follower.offset"] = flat["profile.offset"]
-    if made_for == "roller":
-        table["follower.roller_radius"] = f"{roller_radius} m"
-    if made_for != "flat" and made_for != face:
-        raise ParameterError(f"profile.face {made_for!r}: a profile made for a knife edge or a roller is that "
-                             f"follower's pitch curve; it takes a rocking {made_for} only, not a {face} (a profile "
-                             "made for a flat face takes either)")
-    return spec_from_table(table, name=name, folder=folder)
-
-
 def rocking_spec_from_table(flat: dict, name: str = "custom", citation: str = "", folder: Path | None = None
                             ) -> RockingSpec:
     """A :class:`RockingSpec` from flattened TOML (dotted keys -> raw values); ``folder``
@@ -181,7 +163,8 @@ def rocking_spec_from_table(flat: dict, name: str = "custom", citation: str = ""
     if v["follower.lift_direction"] not in LIFT_DIRECTIONS:
         raise ParameterError(f"follower.lift_direction must be one of {', '.join(LIFT_DIRECTIONS)}, "
                              f"got {v['follower.lift_direction']!r}")
-    profile = _profile_spec(flat, face, v["follower.roller_radius"], name, folder)
+    passed = {key: value for key, value in flat.items() if key.startswith(_PASSED)}
+    profile = profile_spec(passed, face, v["follower.roller_radius"], name, folder)
     return RockingSpec(
         name=name, citation=citation, face=face, roller_radius=v["follower.roller_radius"],
         pivot_x=v["follower.pivot_x"], pivot_y=v["follower.pivot_y"], arm_length=v["follower.arm_length"],

@@ -93,7 +93,7 @@ def prepare(system: System) -> Prepared:
 
 
 #: The parameters as TOML text, for the result's attributes (once per distinct system).
-_parameters_toml = functools.lru_cache(maxsize=64)(system_to_toml)
+_parameters_toml = functools.lru_cache(maxsize=64)(functools.partial(system_to_toml, ignore_profile=True))
 
 
 def penetration_resolution(prep: Prepared, rtol: float, atol: float) -> float:

@@ -295,8 +295,8 @@ def drum_brake() -> TwoFollowerRig:
     ``0.1 N m`` and the bearing's viscous coefficient ``2e-4 N m s/rad``, of the order
     of the followers' mean friction torque so that the cam's speed visibly fluctuates.
     """
-    import camdyn
+    from camdyn.params.config import load_system
 
-    s = camdyn.load_system("sundar2014-friction").with_values(**{"environment.gravity": 0.0})
+    s = load_system("sundar2014-friction").with_values(**{"environment.gravity": 0.0})
     drive = CamDrive(shaft_inertia=2e-4, kind="constant", torque=0.1, bearing_viscous=2e-4)
     return TwoFollowerRig(system=s, second=s, placement=math.pi, drive=drive)
