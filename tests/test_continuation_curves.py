@@ -96,3 +96,17 @@ def test_map_draws_the_curve_and_refuses_bad_curves_before_work(tmp_path, capsys
             speeds = ds["motion.speed"].values
             assert periods[speeds < speed - 0.1][-1] == 1 and periods[speeds > speed + 0.1][0] == 2
     assert out.with_suffix(".png").stat().st_size > 10_000
+
+
+def test_grazing_curve_of_the_rigid_impact_oscillator_is_the_closed_form():
+    # the non-impacting orbit grazes the wall where the linear steady state's amplitude
+    # A / sqrt((w^2 - W^2)^2 + (2 zeta w W)^2) reaches sigma, for each wall position sigma
+    from test_continuation import FORCE, W_NATURAL, ZETA
+    walls = np.array([1.5, 1.6, 1.7, 1.8])
+    amplitude = lambda w: FORCE / np.hypot(W_NATURAL ** 2 - w ** 2, 2 * ZETA * W_NATURAL * w)
+    expected = [brentq(lambda w: amplitude(w) - sigma, 0.3, 0.99, xtol=1e-14) for sigma in walls]
+    curve = bifurcation_curve(lambda sigma: _rigid(0.5, sigma), "grazing", walls, 0.5795, 0.05, transient=300,
+                              second_name="sigma")
+    assert "last value" in curve.stopped, curve.stopped
+    assert np.max(np.abs(curve.parameters - expected)) < 1e-7, curve.parameters - expected   # measured 4.6e-9
+    assert all(p.orbit.impacts_per_period == 0 for p in curve.points)

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from camdyn.continuation.branches import KINDS, continue_orbits
+from camdyn.continuation.branches import KINDS, MIN_STEP, continue_orbits
 from camdyn.continuation.orbits import Orbit, find_orbit
 from camdyn.continuation.problem import Problem, system_problem
 from camdyn.errors import CamdynError, ParameterError, SimulationError
@@ -32,9 +32,10 @@ from camdyn.params.system import System
 
 __all__ = ["CurvePoint", "Curve", "bifurcation_curve", "system_curve"]
 
-#: Smallest arclength step of the short branches (scaled units) [-]: where a branch ends
-#: at a loss of contact (no orbit past it) the step halves down to it before the end is
-#: placed by the secant of the smallest normal force.
+#: Smallest arclength step of the short branches that end at a loss of contact (scaled
+#: units) [-]: no orbit exists past it, and the step halves down to this before the end
+#: is placed by the secant of the smallest normal force (the other kinds go down to
+#: :data:`~camdyn.continuation.branches.MIN_STEP`, which a grazing's end needs).
 END_STEP = 1e-4
 #: Most orbits on one short branch.
 MAX_POINTS = 120
@@ -119,7 +120,8 @@ def _locate(problem: Problem, kind: str, centre: float, window: float, start, pe
         orbit = None
     if orbit is None:
         orbit = find_orbit(problem, value=low, periods=periods, transient=transient)
-    branch = continue_orbits(problem, orbit, centre + window, step=step, min_step=min(step, END_STEP),
+    smallest = min(step, END_STEP) if kind == "contact-loss" else min(step, MIN_STEP)
+    branch = continue_orbits(problem, orbit, centre + window, step=step, min_step=smallest,
                              max_step=max(step, 0.05), max_points=MAX_POINTS)
     found = [b for b in branch.bifurcations if b.kind == kind]
     if not found:
