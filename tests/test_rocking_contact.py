@@ -17,6 +17,7 @@ import math
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+from test_rocking_roller import ARM, INERTIA, PRELOAD, STIFFNESS, circle_geometry, closed_form
 
 from camdyn.errors import ParameterError
 from camdyn.simulation.rocking_roller import (
@@ -26,7 +27,6 @@ from camdyn.simulation.rocking_roller import (
     simulate_rocking,
 )
 from camdyn.simulation.translating_contact import HertzContact
-from test_rocking_roller import ARM, INERTIA, PRELOAD, STIFFNESS, circle_geometry, closed_form
 
 #: Soft materials [Pa] and a roller width [m], so that a contact lasts about a millisecond.
 MODULUS, POISSON, WIDTH = 2e8, 0.3, 5e-3

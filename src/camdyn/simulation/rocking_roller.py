@@ -55,8 +55,8 @@ radius would come from the lift table's curvature, which is not the cam's.
 
 from __future__ import annotations
 
-import math
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 
