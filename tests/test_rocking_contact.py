@@ -13,13 +13,15 @@ against values computed here from outside the code:
 """
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 from test_rocking_roller import ARM, INERTIA, PRELOAD, STIFFNESS, circle_geometry, closed_form
 
-from camdyn.errors import ParameterError
+from camdyn.errors import ParameterError, UnknownKeyError
+from camdyn.io.rocking_config import load_rocking
 from camdyn.simulation.rocking_roller import (
     RockingFollower,
     contact_lever,
@@ -173,3 +175,36 @@ def test_a_knife_edge_takes_no_hertz_contact():
     with pytest.raises(ParameterError, match="knife edge takes the compliant contact only"):
         RockingFollower(circle_geometry("knife", roller=0.0), INERTIA, STIFFNESS, PRELOAD, contact="hertz",
                         hertz=HertzContact(tip_radius=1e-3, geometry=""))
+
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "profiles" / "rocking_roller.toml"
+
+
+def test_the_contact_keys_of_a_configuration_build_the_follower():
+    follower, _ = load_rocking(EXAMPLE, {"contact.law": "hertz", "contact.width": "6 mm",
+                                         "contact.cam_modulus": "200 GPa", "contact.damping_law": "hunt-crossley",
+                                         "contact.restitution": "0.7"})
+    assert follower.contact == "hertz" and follower.hertz == HertzContact(
+        cam_modulus=200e9, geometry="line", width=6e-3, damping_law="hunt-crossley", restitution=0.7)
+    follower, _ = load_rocking(EXAMPLE, {"contact.law": "compliant", "contact.stiffness": "3e4 N*m",
+                                         "contact.damping": "0.2 N*m*s"})
+    assert (follower.contact, follower.contact_stiffness, follower.contact_damping) == ("compliant", 3e4, 0.2)
+
+
+@pytest.mark.parametrize("change, error, match", [
+    ({"contact.law": "soft"}, ParameterError, "contact.law must be one of"),
+    ({"contact.law": "compliant"}, ParameterError, "contact.stiffness"),
+    ({"contact.law": "compliant", "contact.stiffness": "-1 N*m"}, ParameterError, "contact.stiffness"),
+    ({"contact.stiffness": "1 N*m"}, UnknownKeyError, "not a key of the 'rigid' contact law"),
+    ({"contact.law": "hertz", "contact.stiffness": "1 N*m"}, UnknownKeyError, "not a key of the 'hertz'"),
+    ({"contact.law": "hertz"}, ParameterError, "contact.width"),
+    ({"contact.law": "hertz", "contact.width": "5 mm", "contact.geometry": "point"}, ParameterError,
+     "line contact only"),
+    ({"contact.law": "hertz", "contact.width": "5 mm", "contact.tip_radius": "1 mm"}, UnknownKeyError,
+     "contact.tip_radius"),
+    ({"contact.law": "hertz", "contact.width": "5 mm", "contact.cam_poisson": "0.7"}, ParameterError,
+     "contact.cam_poisson"),
+])
+def test_bad_contact_keys_are_refused(change, error, match):
+    with pytest.raises(error, match=match):
+        load_rocking(EXAMPLE, change)
