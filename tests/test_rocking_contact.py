@@ -46,7 +46,7 @@ def _moment_law(kind):
     """The contact moment [N m] as a function of penetration delta [rad], its rate [rad/s]
     and the approach rate at the onset [rad/s]."""
     if kind == "compliant":
-        return lambda d, dd, v: 200.0 * d + 0.1 * dd
+        return lambda d, dd, v: 2000.0 * d + 0.1 * dd
     lever = _lever()
     star = MODULUS / (2 * (1 - POISSON ** 2))             # 1/E* = 2 (1 - nu^2) / Y (Johnson, eq. 4.22)
     k = math.pi / 4 * star * WIDTH * lever ** 2           # line contact, (pi/4) E* l, times L_e^2
@@ -57,7 +57,7 @@ def _moment_law(kind):
 def _follower(kind):
     geometry = circle_geometry()
     if kind == "compliant":
-        return RockingFollower(geometry, INERTIA, STIFFNESS, PRELOAD, contact="compliant", contact_stiffness=200.0,
+        return RockingFollower(geometry, INERTIA, STIFFNESS, PRELOAD, contact="compliant", contact_stiffness=2000.0,
                                contact_damping=0.1)
     law = HertzContact(cam_modulus=MODULUS, follower_modulus=MODULUS, cam_poisson=POISSON, follower_poisson=POISSON,
                        width=WIDTH, damping_law="hunt-crossley", restitution=RESTITUTION)
@@ -81,7 +81,7 @@ def reference(kind, w, t_end, rest):
     while t < t_end:
         gap.direction = 1 if contact else -1
         sol = solve_ivp(rates, (t, t_end), y, method="DOP853", rtol=1e-12, atol=1e-14, events=gap,
-                        dense_output=True, args=(contact, approach), max_step=2e-4)
+                        dense_output=True, args=(contact, approach), max_step=1e-5)
         pieces.append((t, sol.t[-1], sol.sol))
         t, y = sol.t[-1], sol.y[:, -1].copy()
         if sol.status != 1:
@@ -97,7 +97,9 @@ def test_a_revolution_with_impacts_matches_an_independent_solution(kind):
     """The arm dropped onto the cam at 1.15 times the rigid lift-off speed: it bounces,
     settles, leaves the cam and lands again within the revolution. The compiled run (on
     the spline table) against the reference: the same contact onsets and ends, within
-    1e-8 s, and the arm angle within 1e-8 rad."""
+    1e-8 s (measured 9e-13 s for both laws), and the arm angle within 1e-8 rad. On this
+    rig the lever's rms is 59.5 mm of the 60 mm arm and its square spreads 2.9 % over the
+    revolution."""
     follower = _follower(kind)
     w = 1.15 * rocking_liftoff_speed(follower)
     duration = 2 * math.pi / w
@@ -130,7 +132,8 @@ def _penalty_damping(stiffness, restitution=RESTITUTION):
 def test_the_stiffening_contact_converges_to_the_rigid_impacts():
     """Dropped onto the cam, the arm's first three landings (rigid: impacts; compliant:
     contact onsets) agree better at every decade of k_c; a contact lasts pi sqrt(I /
-    k_c), so the error should fall about sqrt(10) times a decade."""
+    k_c), so the error should fall about sqrt(10) times a decade (measured at k_c = 1e3 to
+    1e6 N m/rad: 1.6e-3, 4.7e-4, 1.5e-4, 4.6e-5 s)."""
     geometry = circle_geometry()
     rigid = RockingFollower(geometry, INERTIA, STIFFNESS, PRELOAD, restitution=RESTITUTION)
     w = 0.5 * rocking_liftoff_speed(rigid)
@@ -140,15 +143,15 @@ def test_the_stiffening_contact_converges_to_the_rigid_impacts():
     impacts = ds.event_time.values[ds.event_kind.values == "impact"][:3]
     assert impacts.size == 3
     errors = []
-    for stiffness in (1e2, 1e3, 1e4, 1e5):
+    for stiffness in (1e3, 1e4, 1e5, 1e6):
         arm = RockingFollower(geometry, INERTIA, STIFFNESS, PRELOAD, contact="compliant",
                               contact_stiffness=stiffness, contact_damping=_penalty_damping(stiffness))
         run = simulate_rocking(arm, w, 0.05, **options)
         onsets = run.event_time.values[run.event_kind.values == "contact onset"][:3]
         errors.append(np.abs(onsets - impacts).max())
     assert all(a > b for a, b in zip(errors, errors[1:])), errors
-    slopes = np.diff(np.log10(errors))
-    assert np.all(slopes < -0.3), slopes
+    slopes = np.diff(np.log10(errors))   # per decade of k_c
+    np.testing.assert_allclose(slopes, -0.5, atol=0.1)
 
 
 HERTZ = HertzContact(width=WIDTH)
