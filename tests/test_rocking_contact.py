@@ -12,6 +12,9 @@ against values computed here from outside the code:
 - refusals before any work.
 """
 
+import contextlib
+import io
+import json
 import math
 from pathlib import Path
 
@@ -20,6 +23,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from test_rocking_roller import ARM, INERTIA, PRELOAD, STIFFNESS, circle_geometry, closed_form
 
+from camdyn.cli.app import main
 from camdyn.errors import ParameterError, UnknownKeyError
 from camdyn.io.rocking_config import load_rocking
 from camdyn.simulation.rocking_roller import (
@@ -211,3 +215,23 @@ def test_the_contact_keys_of_a_configuration_build_the_follower():
 def test_bad_contact_keys_are_refused(change, error, match):
     with pytest.raises(error, match=match):
         load_rocking(EXAMPLE, change)
+
+
+def test_simulate_runs_a_compliant_configuration_and_refuses_a_bad_law():
+    settings = ("--set", "contact.law=compliant", "--set", "contact.stiffness=1e4 N*m", "--set",
+                "contact.damping=0.02 N*m*s")
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        status = main(["simulate", str(EXAMPLE), "--revolutions", "1", "--sample-rate", "2kHz", "--json", *settings])
+    assert status == 0, err.getvalue()
+    summary = json.loads(out.getvalue())["summary"]
+    follower, spec = load_rocking(EXAMPLE, {"contact.law": "compliant", "contact.stiffness": "1e4 N*m",
+                                            "contact.damping": "0.02 N*m*s"})
+    w = spec.profile.speed
+    ds = simulate_rocking(follower, w, 2 * math.pi / w, sample_rate=2000.0, rtol=1e-10)
+    onsets = int(np.count_nonzero(ds.event_kind.values == "contact onset"))
+    assert summary["contact_law"] == "compliant" and summary["contact_onsets"] == onsets >= 1
+    assert summary["impacts"] == 0
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err := io.StringIO()):
+        status = main(["simulate", str(EXAMPLE), "--set", "contact.law=soft"])
+    assert status == 2 and "contact.law" in err.getvalue() and "Traceback" not in err.getvalue()
