@@ -359,9 +359,11 @@ def simulate_rocking(follower, speed, duration, sample_rate=10e3, phase=0.0, ini
         ``contact_angle`` ``s`` [rad] (from the rest angle, in the lift sense), ``gap``
         [rad], ``pressure_angle`` [rad], ``contact_moment`` [N m], ``contact_force`` [N],
         ``in_contact``; over ``event``: ``event_time``, ``event_kind`` (as the
-        translating follower's), ``event_velocity`` [rad/s] and ``event_normal_velocity``
+        translating follower's: under a compliant or Hertz law ``contact onset`` and
+        ``contact end``), ``event_velocity`` [rad/s] and ``event_normal_velocity``
         [m/s] (relative, before the event). Attributes hold the parameters, the rest
-        angle and the solver counters.
+        angle, the contact law (and, Hertz, ``contact_lever_m`` and ``lever_spread`` of
+        :func:`contact_lever`) and the solver counters.
     """
     if not isinstance(follower, RockingFollower):
         raise ParameterError(f"expected a RockingFollower, got {type(follower).__name__}")
