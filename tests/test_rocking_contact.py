@@ -5,8 +5,9 @@ against values computed here from outside the code:
   circle's closed form of test_rocking_roller.py) and its own contact moments:
   a torsional spring-dashpot, and Hertz line contact ``(pi/4) E* l L_e^2 delta`` with
   Hunt and Crossley's damping ``chi = 3 (1 - e) / 2`` (Hunt and Crossley 1975,
-  doi:10.1115/1.3423596) or a dashpot ``c L_e^2 delta'``, the lever ``L_e`` the root mean square of ``L cos(phi)`` over
-  the closed form's pressure angles;
+  doi:10.1115/1.3423596) or a dashpot ``c L_e^2 delta'``, the lever ``L_e`` the root
+  mean square of ``L cos(phi)`` over the closed form's pressure angles;
+- the keys of a configuration file and ``camdyn simulate`` on a compliant one;
 - the rigid limit: a stiffening spring-dashpot matched to Newton's restitution lands
   where the rigid run impacts, the error falling at every decade;
 - refusals before any work.
