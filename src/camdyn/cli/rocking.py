@@ -29,7 +29,8 @@ def rocking_summary(ds, follower, name: str) -> dict:
     speed = float(ds.attrs["speed_rad_s"])
     revolutions = float(ds["time"][-1] - ds["time"][0]) * speed / (2.0 * math.pi)
     kinds = ds["event_kind"].values
-    count = {kind: int(np.count_nonzero(kinds == kind)) for kind in ("impact", "separation", "capture")}
+    count = {kind: int(np.count_nonzero(kinds == kind)) for kind in ("impact", "separation", "capture",
+                                                                          "contact onset")}
     liftoff = rocking_liftoff_speed(follower)
     return {
         "preset": name,
@@ -39,6 +40,8 @@ def rocking_summary(ds, follower, name: str) -> dict:
         "impacts_per_revolution": count["impact"] / revolutions if revolutions else 0.0,
         "separations": count["separation"],
         "captures": count["capture"],
+        "contact_law": str(ds.attrs.get("contact_law", "rigid")),
+        "contact_onsets": count["contact onset"],
         "contact_force_max_N": float(ds["contact_force"].max()),
         "gap_max_rad": float(ds["gap"].max()),
         "pressure_angle_max_deg": float(np.degrees(np.abs(ds["pressure_angle"]).max())),
@@ -56,6 +59,8 @@ def _print(out: dict) -> None:
     table.add_row("impacts", f"{out['impacts']} ({out['impacts_per_revolution']:.3g} per revolution)")
     table.add_row("lift-off events (separations)", f"{out['separations']}")
     table.add_row("captures into sustained contact", f"{out['captures']}")
+    if out["contact_law"] != "rigid":
+        table.add_row(f"landings ({out['contact_law']} contact)", f"{out['contact_onsets']}")
     table.add_row("max contact force", f"{out['contact_force_max_N']:.5g} N")
     table.add_row("max gap (arm angle)", f"{math.degrees(out['gap_max_rad']):.4g} deg")
     table.add_row("max pressure angle", f"{out['pressure_angle_max_deg']:.4g} deg")

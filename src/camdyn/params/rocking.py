@@ -38,12 +38,12 @@ from __future__ import annotations
 import difflib
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyError
 from camdyn.params.profile_table import profile_spec
-from camdyn.params.profiles import TranslatingSpec
+from camdyn.params.profiles import HERTZ_DAMPING_LAWS, HERTZ_KEYS, TranslatingSpec
 from camdyn.params.units import parse_quantity
 
 __all__ = ["ROCKING", "SCHEMA", "LIFT_DIRECTIONS", "RockingSpec", "read_rocking", "rocking_spec_from_table"]
@@ -68,7 +68,24 @@ SCHEMA: dict[str, tuple[str, object, str]] = {
     "spring.preload": ("N*m", _REQUIRED, "spring moment M0 with the arm on the cam's lowest point"),
     "contact.restitution": ("", 0.8, "Newton's coefficient of restitution e of the normal velocity"),
     "contact.capture_velocity": ("1/s", 1e-6, "impacts slower than this [rad/s] end in sustained contact"),
+    "contact.law": ("str", "rigid", "'rigid' (Newton restitution), 'compliant' (torsional spring-dashpot) or "
+                                    "'hertz' (line contact of a cylindrical roller)"),
+    "contact.stiffness": ("N*m", 0.0, "torsional contact stiffness k_c [N m/rad] (compliant)"),
+    "contact.damping": ("N*m*s", 0.0, "torsional contact damping c_c [N m s/rad] (compliant); under the hertz "
+                                      "law the viscous law's c [N s/m]"),
+    "contact.cam_modulus": ("Pa", 210e9, "Young's modulus of the cam Y_c (hertz)"),
+    "contact.cam_poisson": ("", 0.3, "Poisson's ratio of the cam nu_c (hertz)"),
+    "contact.follower_modulus": ("Pa", 210e9, "Young's modulus of the roller Y_f (hertz)"),
+    "contact.follower_poisson": ("", 0.3, "Poisson's ratio of the roller nu_f (hertz)"),
+    "contact.geometry": ("str", "line", "'line' only: the rocking roller's Hertz contact (hertz)"),
+    "contact.width": ("m", 0.0, "contact length l of line contact: the cam's or roller's width (hertz)"),
+    "contact.damping_law": ("str", "none", "damping law (hertz): " + ", ".join(HERTZ_DAMPING_LAWS)),
+    "contact.reference_velocity": ("m/s", 1e-3, "smallest approach velocity of the restitution laws (hertz)"),
 }
+#: Contact laws of the arm.
+CONTACT_LAWS = ("rigid", "compliant", "hertz")
+#: The Hertz keys of this schema (the translating schema's, less the knife edge's tip radius).
+_HERTZ = tuple(key for key in HERTZ_KEYS if key in SCHEMA)
 #: Keys passed to the translating follower's reader as they are.
 _PASSED = ("profile.", "motion.")
 _META_KEYS = ("preset.name", "preset.citation", "preset.description")
@@ -92,6 +109,15 @@ class RockingSpec:
         I [kg m^2], c_t [N m s/rad], k_t [N m/rad], M0 [N m].
     restitution, capture_velocity : float
         e [-] and [rad/s].
+    contact : str
+        ``"rigid"``, ``"compliant"`` or ``"hertz"``.
+    contact_stiffness, contact_damping : float
+        k_c [N m/rad] and c_c [N m s/rad] (compliant); ``contact_damping`` is the viscous
+        law's c [N s/m] under the Hertz law.
+    hertz : dict
+        The Hertz law's keyword arguments of
+        :class:`camdyn.simulation.translating_contact.HertzContact` in SI units (empty
+        unless ``contact`` is ``"hertz"``).
     profile : TranslatingSpec
         The profile and the motion, as the translating follower's reader gives them
         (its follower's mass, spring and contact are placeholders).
@@ -112,6 +138,10 @@ class RockingSpec:
     restitution: float
     capture_velocity: float
     profile: TranslatingSpec
+    contact: str = "rigid"
+    contact_stiffness: float = 0.0
+    contact_damping: float = 0.0
+    hertz: dict = field(default_factory=dict)
 
 
 def _value(key: str, raw, unit: str):
@@ -149,6 +179,8 @@ def rocking_spec_from_table(flat: dict, name: str = "custom", citation: str = ""
     v = {}
     for key, (unit, default, meaning) in SCHEMA.items():
         if key in flat:
+            if key == "contact.damping" and flat.get("contact.law") == "hertz":
+                unit = "N*s/m"    # the viscous Hertz law's c, on the roller
             v[key] = _value(key, flat[key], unit)
         elif default is _REQUIRED:
             raise ParameterError(f"missing key {key!r} ({meaning})")
@@ -163,14 +195,43 @@ def rocking_spec_from_table(flat: dict, name: str = "custom", citation: str = ""
     if v["follower.lift_direction"] not in LIFT_DIRECTIONS:
         raise ParameterError(f"follower.lift_direction must be one of {', '.join(LIFT_DIRECTIONS)}, "
                              f"got {v['follower.lift_direction']!r}")
+    _check_contact(flat, v)
     passed = {key: value for key, value in flat.items() if key.startswith(_PASSED)}
     profile = profile_spec(passed, face, v["follower.roller_radius"], name, folder)
+    law = v["contact.law"]
+    hertz = {key.split(".")[1]: v[key] for key in _HERTZ} if law == "hertz" else {}
+    if hertz:
+        hertz.update(damping=v["contact.damping"])
     return RockingSpec(
         name=name, citation=citation, face=face, roller_radius=v["follower.roller_radius"],
         pivot_x=v["follower.pivot_x"], pivot_y=v["follower.pivot_y"], arm_length=v["follower.arm_length"],
         lift_direction=LIFT_DIRECTIONS[v["follower.lift_direction"]], inertia=v["follower.inertia"],
         damping=v["follower.damping"], stiffness=v["spring.stiffness"], preload=v["spring.preload"],
-        restitution=v["contact.restitution"], capture_velocity=v["contact.capture_velocity"], profile=profile)
+        restitution=v["contact.restitution"], capture_velocity=v["contact.capture_velocity"], profile=profile,
+        contact=law, contact_stiffness=v["contact.stiffness"] if law == "compliant" else 0.0,
+        contact_damping=v["contact.damping"] if law == "compliant" else 0.0, hertz=hertz)
+
+
+def _check_contact(flat: dict, v: dict) -> None:
+    """The contact law's keys: only under their law, a positive stiffness for the
+    compliant law, ratios in range (the rest is checked by the follower when built)."""
+    law = v["contact.law"]
+    if law not in CONTACT_LAWS:
+        raise ParameterError(f"contact.law must be one of {', '.join(CONTACT_LAWS)}, got {law!r}")
+    own = {"rigid": ("contact.capture_velocity",), "compliant": ("contact.stiffness", "contact.damping"),
+           "hertz": _HERTZ + ("contact.damping",)}
+    foreign = [key for key in flat if key.startswith("contact.") and key not in own[law]
+               and key not in ("contact.law", "contact.restitution") and key in SCHEMA]
+    if foreign:
+        raise UnknownKeyError(f"{foreign[0]} is not a key of the {law!r} contact law (it takes "
+                              f"{', '.join(own[law])})")
+    if law == "compliant" and v["contact.stiffness"] <= 0.0:
+        raise ParameterError("contact.stiffness: a compliant contact needs a positive stiffness [N m/rad]")
+    for key in ("contact.stiffness", "contact.damping", "contact.width"):
+        if v[key] < 0.0:
+            raise ParameterError(f"{key} must not be negative, got {v[key]!r}")
+    if not 0.0 <= v["contact.restitution"] <= 1.0:
+        raise ParameterError(f"contact.restitution must be between 0 and 1, got {v['contact.restitution']!r}")
 
 
 def _flatten(table: dict, prefix: str = "") -> dict:

@@ -32,10 +32,30 @@ s' + M_0 + k_t s`` [N m] (eq. 3 there) and the contact force ``F = M / (L cos(ph
 and interpolated by a periodic cubic spline (SciPy's ``CubicSpline``) in the compiled
 model's table format; its errors are measured by the tests against the exact
 derivatives (see the documentation's section on the rocking roller).
+
+**Compliant contact.** Instead of Newton's law the cam may push the arm through a
+penalty: the compliant law, a torsional spring-dashpot on the angular penetration
+``delta = s - x`` [rad] (the moment ``M = k_c delta + c_c delta'`` [N m], eq. (1) of the
+translating model's compliant law in angles), or Hertz line contact of a cylindrical
+roller of width ``l`` (K. L. Johnson, *Contact Mechanics*, 1985, section 4.3). The
+roller's penetration along the contact normal is, to first order in ``delta``,
+``delta_n = L_n delta`` with the normal's lever ``L_n = L cos(phi)`` about the pivot (the
+lever the contact force's moment has), so the Hertz line force ``N = (pi/4) E* l
+delta_n`` gives the moment ``N L_n = (pi/4) E* l L_n^2 delta``. The translating model's
+Hertz law takes one constant lever: the revolution's root mean square ``L_e =
+sqrt(<L_n^2>)`` over the table's samples, so the arm's angular Hertz stiffness is
+``(pi/4) E* l L_e^2`` [N m/rad]; the relative spread ``max |L_n^2 / L_e^2 - 1|`` of the
+lever over the revolution is the error of this stiffness at the worst angle (reported
+with each run as ``lever_spread``). The restitution damping laws scale with the ratio
+``delta' / v_approach``, the same in angles; a viscous ``c`` [N s/m] becomes ``c L_e^2``
+[N m s/rad] and the reference velocity ``v / L_e`` [rad/s]. A knife edge (point contact
+through its tip radius) takes the compliant law only: the Hertz point law's equivalent
+radius would come from the lift table's curvature, which is not the cam's.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -51,12 +71,15 @@ from camdyn.model.rocking_roller import RockingGeometry, contact_configuration
 from camdyn.params.rocking import RockingSpec
 from camdyn.simulation import limits
 from camdyn.simulation.translating import TranslatingFollower, follower_from_spec, simulate_translating
+from camdyn.simulation.translating_contact import HertzContact
 
 __all__ = ["RockingFollower", "RockingTable", "rocking_table", "simulate_rocking", "rocking_liftoff_speed",
-           "rocking_from_spec"]
+           "rocking_from_spec", "contact_lever", "CONTACT_LAWS"]
 
 #: Samples of the contact angle over one revolution in the lift table.
 SAMPLES = 8192
+#: Contact laws of the arm: Newton's restitution, a torsional spring-dashpot, Hertz line contact.
+CONTACT_LAWS = ("rigid", "compliant", "hertz")
 
 
 @dataclass(frozen=True)
@@ -80,6 +103,16 @@ class RockingFollower:
     capture_velocity : float
         Impacts slower than this [rad/s] (relative angular velocity) end in sustained
         contact.
+    contact : str
+        ``"rigid"`` (Newton's restitution), ``"compliant"`` (torsional spring-dashpot
+        ``contact_stiffness``, ``contact_damping``) or ``"hertz"`` (line contact of a
+        cylindrical roller, ``hertz``).
+    contact_stiffness : float
+        k_c [N m/rad] of the compliant law.
+    contact_damping : float
+        c_c [N m s/rad] of the compliant law.
+    hertz : HertzContact or None
+        Materials, width and damping law of Hertz line contact (a roller only).
     samples : int
         Cam angles of the lift table (at least 256).
     citation : str
@@ -93,13 +126,18 @@ class RockingFollower:
     damping: float = 0.0
     restitution: float = 0.8
     capture_velocity: float = 1e-6
+    contact: str = "rigid"
+    contact_stiffness: float = 0.0
+    contact_damping: float = 0.0
+    hertz: HertzContact | None = None
     samples: int = SAMPLES
     citation: str = field(default="", compare=False)
 
     def __post_init__(self):
         if not isinstance(self.geometry, RockingGeometry):
             raise ParameterError(f"geometry must be a RockingGeometry, got {type(self.geometry).__name__}")
-        for name in ("inertia", "stiffness", "preload", "damping", "restitution", "capture_velocity"):
+        for name in ("inertia", "stiffness", "preload", "damping", "restitution", "capture_velocity",
+                     "contact_stiffness", "contact_damping"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
                 raise ParameterError(f"{name} must be a finite number, got {value!r}")
@@ -111,6 +149,33 @@ class RockingFollower:
             raise ParameterError(f"restitution must be between 0 and 1, got {self.restitution!r}")
         if isinstance(self.samples, bool) or not isinstance(self.samples, (int, np.integer)) or self.samples < 256:
             raise ParameterError(f"samples must be a whole number of at least 256, got {self.samples!r}")
+        self._check_contact()
+
+    def _check_contact(self):
+        """Refuse a contact law the arm cannot take, before any work."""
+        if self.contact not in CONTACT_LAWS:
+            raise ParameterError(f"contact must be one of {', '.join(CONTACT_LAWS)}, got {self.contact!r}")
+        if self.contact == "compliant" and self.contact_stiffness <= 0.0:
+            raise ParameterError("the compliant contact needs a positive contact_stiffness [N m/rad]")
+        if self.contact != "compliant" and (self.contact_stiffness != 0.0 or self.contact_damping != 0.0):
+            raise ParameterError(f"contact_stiffness and contact_damping belong to the compliant law, not the "
+                                 f"{self.contact} one")
+        if self.contact != "hertz":
+            if self.hertz is not None:
+                raise ParameterError(f"hertz is the Hertz law's, not the {self.contact} one's (contact='hertz')")
+            return
+        if not isinstance(self.hertz, HertzContact):
+            raise ParameterError("the Hertz contact needs its materials and width (hertz=HertzContact(...))")
+        if self.geometry.roller_radius <= 0.0:
+            raise ParameterError("a rocking knife edge takes the compliant contact only: its Hertz point contact "
+                                 "would need the cam's curvature, not the lift table's")
+        if self.hertz.geometry == "point":
+            raise ParameterError("contact.geometry: the rocking roller takes Hertz line contact only (a "
+                                 "cylindrical roller); use 'line' with contact.width")
+        if self.hertz.tip_radius != 0.0:
+            raise ParameterError("contact.tip_radius is for a knife edge only, not a roller")
+        if self.hertz.width <= 0.0:
+            raise ParameterError("contact.width: line contact needs the positive width l [m] of the contact")
 
 
 def rocking_from_spec(spec, lift=None):
@@ -133,9 +198,11 @@ def rocking_from_spec(spec, lift=None):
     profile = follower_from_spec(spec.profile, lift).profile
     geometry = RockingGeometry(profile, spec.pivot_x, spec.pivot_y, spec.arm_length, spec.roller_radius,
                                spec.lift_direction)
+    hertz = HertzContact(restitution=spec.restitution, **spec.hertz) if spec.contact == "hertz" else None
     return RockingFollower(geometry, spec.inertia, spec.stiffness, spec.preload, damping=spec.damping,
                            restitution=spec.restitution, capture_velocity=spec.capture_velocity,
-                           citation=spec.citation)
+                           contact=spec.contact, contact_stiffness=spec.contact_stiffness,
+                           contact_damping=spec.contact_damping, hertz=hertz, citation=spec.citation)
 
 
 @dataclass(frozen=True)
@@ -205,6 +272,41 @@ def rocking_table(geometry, samples=SAMPLES):
     return RockingTable(profile, rest, theta, lift, config.pressure_angle)
 
 
+def contact_lever(follower):
+    """The constant lever of the arm's Hertz law and its spread over a revolution.
+
+    Returns
+    -------
+    lever : float
+        ``L_e = sqrt(<L_n^2>)`` [m], the root mean square over the table's cam angles of
+        the contact normal's lever ``L_n = L cos(phi)`` about the pivot.
+    spread : float
+        ``max |L_n^2 / L_e^2 - 1|`` [-]: the largest relative error of the angular
+        stiffness ``K L_e^2`` against the exact ``K L_n^2``.
+    """
+    table = rocking_table(follower.geometry, follower.samples)
+    squares = (follower.geometry.arm_length * np.cos(table.pressure_angle)) ** 2
+    mean = float(np.mean(squares))
+    return math.sqrt(mean), float(np.max(np.abs(squares / mean - 1.0)))
+
+
+def _angular_law(follower):
+    """Keyword arguments of the translating follower's contact law in the arm's angles."""
+    if follower.contact == "rigid":
+        return {}
+    if follower.contact == "compliant":
+        return {"contact": "compliant", "contact_stiffness": follower.contact_stiffness,
+                "contact_damping": follower.contact_damping}
+    lever, _ = contact_lever(follower)
+    law = follower.hertz
+    # the line coefficient (pi/4) E* l times L_e^2 is the angular stiffness [N m/rad]:
+    # the width slot carries l L_e^2 [m^3] (module docstring)
+    angular = dataclasses.replace(law, geometry="line", width=law.width * lever ** 2,
+                                  damping=law.damping * lever ** 2,
+                                  reference_velocity=law.reference_velocity / lever)
+    return {"contact": "hertz", "hertz": angular}
+
+
 def rocking_liftoff_speed(follower):
     """The lowest cam speed [rad/s] at which the arm held on the cam would need a pull:
     the smallest positive root over the table's sample angles of ``I s'' omega^2 + c_t
@@ -257,9 +359,11 @@ def simulate_rocking(follower, speed, duration, sample_rate=10e3, phase=0.0, ini
         ``contact_angle`` ``s`` [rad] (from the rest angle, in the lift sense), ``gap``
         [rad], ``pressure_angle`` [rad], ``contact_moment`` [N m], ``contact_force`` [N],
         ``in_contact``; over ``event``: ``event_time``, ``event_kind`` (as the
-        translating follower's), ``event_velocity`` [rad/s] and ``event_normal_velocity``
+        translating follower's: under a compliant or Hertz law ``contact onset`` and
+        ``contact end``), ``event_velocity`` [rad/s] and ``event_normal_velocity``
         [m/s] (relative, before the event). Attributes hold the parameters, the rest
-        angle and the solver counters.
+        angle, the contact law (and, Hertz, ``contact_lever_m`` and ``lever_spread`` of
+        :func:`contact_lever`) and the solver counters.
     """
     if not isinstance(follower, RockingFollower):
         raise ParameterError(f"expected a RockingFollower, got {type(follower).__name__}")
@@ -276,7 +380,8 @@ def simulate_rocking(follower, speed, duration, sample_rate=10e3, phase=0.0, ini
     translating = TranslatingFollower(table.profile, mass=follower.inertia, stiffness=follower.stiffness,
                                       preload=follower.preload, damping=follower.damping,
                                       restitution=follower.restitution,
-                                      capture_velocity=follower.capture_velocity, citation=follower.citation)
+                                      capture_velocity=follower.capture_velocity, citation=follower.citation,
+                                      **_angular_law(follower))
     state = None
     if initial_state is not None:
         y0 = np.asarray(initial_state, dtype=float).reshape(-1)
@@ -335,5 +440,15 @@ def _dataset(follower, table, ds, speed, phase):
         "roller_radius_m": geometry.roller_radius, "lift_direction": geometry.lift_direction,
         "rest_angle_rad": table.rest_angle, "table_samples": follower.samples,
         "cam_follower_of_profile": geometry.profile.follower, "base_radius_m": geometry.profile.base_radius,
+        "contact_law": follower.contact,
     })
+    if follower.contact == "compliant":
+        out.attrs.update({"contact_stiffness_N_m_per_rad": follower.contact_stiffness,
+                          "contact_damping_N_m_s_per_rad": follower.contact_damping})
+    elif follower.contact == "hertz":
+        lever, spread = contact_lever(follower)
+        law = follower.hertz
+        out.attrs.update({"contact_lever_m": lever, "lever_spread": spread, "effective_modulus_Pa": law.modulus,
+                          "contact_width_m": law.width, "damping_law": law.damping_law,
+                          "contact_restitution": law.restitution})
     return out
