@@ -87,14 +87,14 @@ MUTANTS = [
          "return -fs * p[L.DX] * math.cos(p[L.TILT])", 1),
     )),
     Mutant("law D: branches swapped (viscous while compressing)", "camdyn/model/contact.py", (
-        ("c = p[L.BETA] * kd * ad if delta_dot > 0.0 else p[L.VISCOUS_C]",
-         "c = p[L.BETA] * kd * ad if delta_dot < 0.0 else p[L.VISCOUS_C]", 1),
+        ("c = beta * kd * ad if delta_dot > 0.0 else viscous",
+         "c = beta * kd * ad if delta_dot < 0.0 else viscous", 1),
     )),
     Mutant("Flores factor 8(1-e)/(5e) replaced by 3(1-e)/(2e)", "camdyn/params/laws.py", (
         ("    return 1.6 * (1.0 - e) / e\n", "    return 1.5 * (1.0 - e) / e\n", 1),
     )),
     Mutant("adhesion clipping ignored", "camdyn/model/contact.py", (
-        ("if p[L.CLIP] > 0.5 and fn < 0.0:", "if p[L.CLIP] > 1.5 and fn < 0.0:", 1),
+        ("p[L.V_REFERENCE], p[L.CLIP] > 0.5)", "p[L.V_REFERENCE], p[L.CLIP] > 1.5)", 1),
     )),
 ]
 
