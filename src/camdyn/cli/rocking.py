@@ -11,15 +11,11 @@ from rich.table import Table
 
 from camdyn.cli.common import console
 from camdyn.cli.outputs import announce, emit_json
+from camdyn.cli.translating import DEFAULT_RTOL, add_run_rows, run_span
 from camdyn.errors import ParameterError
 from camdyn.params.config import parse_assignments
-from camdyn.params.units import parse_quantity, parse_speed
 
 __all__ = ["simulate_rocking_command", "rocking_summary"]
-
-#: The tolerance of a rocking follower's run when --rtol is not given [-].
-DEFAULT_RTOL = 1e-10
-
 
 def rocking_summary(ds, follower, name: str) -> dict:
     """The headline numbers of a rocking follower's run (schema
@@ -64,12 +60,7 @@ def _print(out: dict) -> None:
     table.add_row("max contact force", f"{out['contact_force_max_N']:.5g} N")
     table.add_row("max gap (arm angle)", f"{math.degrees(out['gap_max_rad']):.4g} deg")
     table.add_row("max pressure angle", f"{out['pressure_angle_max_deg']:.4g} deg")
-    table.add_row("time in contact", f"{100 * out['contact_fraction']:.1f} %")
-    liftoff = out["liftoff_speed_rpm"]
-    table.add_row("lift-off speed of the cam", "never" if liftoff is None else f"{liftoff:.5g} rpm")
-    s = out["solver"]
-    table.add_row("solver", f"{s['accepted_steps']} steps ({s['rejected_steps']} rejected), {s['events']} events, "
-                            f"{out['elapsed_s'] * 1e3:.1f} ms")
+    add_run_rows(table, out)
     console.print(table)
 
 
@@ -88,14 +79,9 @@ def simulate_rocking_command(source: str, assignments, speed: str | None, revolu
         raise ParameterError("--plot is not offered for a rocking roller or knife-edge follower yet; write the "
                              "results with --out")
     follower, spec = load_rocking(source, parse_assignments(assignments))
-    omega = 2.0 * math.pi * parse_speed(speed, "--speed") if speed is not None else spec.profile.speed
-    if omega is None:
-        raise ParameterError(f"{spec.name} gives no cam speed: add motion.speed to the file or pass --speed")
-    if not (isinstance(revolutions, (int, float)) and math.isfinite(revolutions) and revolutions > 0):
-        raise ParameterError(f"--revolutions must be positive, got {revolutions!r}")
-    fs = parse_quantity(sample_rate, "Hz", "--sample-rate")
-    ds = simulate_rocking(follower, omega, revolutions * 2.0 * math.pi / omega, sample_rate=fs,
-                          phase=spec.profile.phase, rtol=DEFAULT_RTOL if rtol is None else rtol)
+    omega, duration, fs = run_span(spec.name, spec.profile.speed, speed, revolutions, sample_rate)
+    ds = simulate_rocking(follower, omega, duration, sample_rate=fs, phase=spec.profile.phase,
+                          rtol=DEFAULT_RTOL if rtol is None else rtol)
     ds.attrs["name"] = spec.name
     summary = rocking_summary(ds, follower, spec.name)
     if not json_out:

@@ -52,6 +52,30 @@ def translating_summary(ds, follower) -> dict:
     }
 
 
+def run_span(name: str, default_speed: float | None, speed: str | None, revolutions: float,
+             sample_rate: str) -> tuple[float, float, float]:
+    """The cam's angular speed [rad/s] (``--speed``, else the configuration's), the run's
+    duration [s] and its sample rate [Hz] for ``camdyn simulate`` on a follower of a
+    profile configuration (translating or rocking), refused before any work."""
+    omega = 2.0 * math.pi * parse_speed(speed, "--speed") if speed is not None else default_speed
+    if omega is None:
+        raise ParameterError(f"{name} gives no cam speed: add motion.speed to the file or pass --speed")
+    if not (isinstance(revolutions, (int, float)) and math.isfinite(revolutions) and revolutions > 0):
+        raise ParameterError(f"--revolutions must be positive, got {revolutions!r}")
+    return omega, revolutions * 2.0 * math.pi / omega, parse_quantity(sample_rate, "Hz", "--sample-rate")
+
+
+def add_run_rows(table: Table, out: dict) -> None:
+    """The summary table's last rows, shared by the profile followers: time in contact,
+    lift-off speed and the solver's counts."""
+    table.add_row("time in contact", f"{100 * out['contact_fraction']:.1f} %")
+    liftoff = out["liftoff_speed_rpm"]
+    table.add_row("lift-off speed of the cam", "never" if liftoff is None else f"{liftoff:.5g} rpm")
+    s = out["solver"]
+    table.add_row("solver", f"{s['accepted_steps']} steps ({s['rejected_steps']} rejected), {s['events']} events, "
+                            f"{out['elapsed_s'] * 1e3:.1f} ms")
+
+
 def _print(out: dict) -> None:
     table = Table("quantity", "value", title=f"simulation of {out['preset']} (translating follower)")
     table.add_row("cam speed", f"{out['speed_rpm']:.5g} rpm")
@@ -62,12 +86,7 @@ def _print(out: dict) -> None:
     table.add_row("captures into sustained contact", f"{out['captures']}")
     table.add_row("max contact force", f"{out['contact_force_max_N']:.5g} N")
     table.add_row("max gap (flight height)", f"{out['gap_max_m'] * 1e3:.4g} mm")
-    table.add_row("time in contact", f"{100 * out['contact_fraction']:.1f} %")
-    liftoff = out["liftoff_speed_rpm"]
-    table.add_row("lift-off speed of the cam", "never" if liftoff is None else f"{liftoff:.5g} rpm")
-    s = out["solver"]
-    table.add_row("solver", f"{s['accepted_steps']} steps ({s['rejected_steps']} rejected), {s['events']} events, "
-                            f"{out['elapsed_s'] * 1e3:.1f} ms")
+    add_run_rows(table, out)
     console.print(table)
 
 
@@ -82,14 +101,9 @@ def simulate_translating_command(source: str, assignments, speed: str | None, re
         raise ParameterError(f"--method {method}: the translating follower is integrated with the automatic "
                              "method only (leave --method out)")
     follower, spec = load_translating(source, parse_assignments(assignments))
-    omega = 2.0 * math.pi * parse_speed(speed, "--speed") if speed is not None else spec.speed
-    if omega is None:
-        raise ParameterError(f"{spec.name} gives no cam speed: add motion.speed to the file or pass --speed")
-    if not (isinstance(revolutions, (int, float)) and math.isfinite(revolutions) and revolutions > 0):
-        raise ParameterError(f"--revolutions must be positive, got {revolutions!r}")
-    fs = parse_quantity(sample_rate, "Hz", "--sample-rate")
-    ds = simulate_translating(follower, omega, revolutions * 2.0 * math.pi / omega, sample_rate=fs,
-                              phase=spec.phase, rtol=DEFAULT_RTOL if rtol is None else rtol)
+    omega, duration, fs = run_span(spec.name, spec.speed, speed, revolutions, sample_rate)
+    ds = simulate_translating(follower, omega, duration, sample_rate=fs, phase=spec.phase,
+                              rtol=DEFAULT_RTOL if rtol is None else rtol)
     ds.attrs["name"] = spec.name
     summary = translating_summary(ds, follower)
     if not json_out:
