@@ -10,15 +10,19 @@ applied at every event (Leine & Nijmeijer 2004, *Dynamics and Bifurcations of
 Non-Smooth Mechanical Systems*, ch. 3 and 7; Seydel 2010, *Practical Bifurcation and
 Stability Analysis*, sec. 7.1-7.3). The eigenvalues of ``M`` are the orbit's Floquet
 multipliers: the orbit is asymptotically stable when all lie inside the unit circle.
+Multiple shooting (``find_orbit(..., segments=m)``, the linear algebra in
+:mod:`~camdyn.continuation.multiple`) cuts the period into ``m`` segments for orbits too
+unstable for one.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from camdyn.continuation import multiple
 from camdyn.continuation.margins import contact_margins
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError, SimulationError
@@ -26,12 +30,15 @@ from camdyn.integrator import driver
 from camdyn.simulation import limits
 from camdyn.systems import registry as systems
 
-__all__ = ["Flow", "Orbit", "flow", "find_orbit", "make_orbit", "shoot", "transient_state", "STABILITY_MARGIN"]
+__all__ = ["Flow", "Orbit", "flow", "find_orbit", "make_orbit", "segment_end", "segment_flow", "shoot",
+           "transient_state", "STABILITY_MARGIN"]
 
 #: A multiplier counts as inside the unit circle when its modulus is below 1 - this [-].
 STABILITY_MARGIN = 1e-7
 #: Samples per forcing period of the orbit's guard, for its smallest value.
 SAMPLES_PER_PERIOD = 256
+#: Halvings of a multiple-shooting Newton step whose trial states make a run fail.
+HALVINGS = 10
 
 
 @dataclass(frozen=True)
@@ -110,6 +117,9 @@ class Orbit:
     extent : ndarray (u,) or None
         The largest magnitude of each unknown over the orbit (its units), the scale of
         that unknown in the continuation.
+    segment_states : ndarray (m, u) or None
+        With multiple shooting (``m`` segments), the unknowns at each segment's start
+        (row 0 is ``state``); None with single shooting.
     """
 
     state: np.ndarray
@@ -127,6 +137,7 @@ class Orbit:
     force_minimum: float = math.nan
     sliding_minimum: float = math.nan
     extent: np.ndarray | None = None
+    segment_states: np.ndarray | None = None
 
 
 def _full(problem: Problem, x: np.ndarray) -> np.ndarray:
@@ -143,11 +154,21 @@ def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samp
     :class:`SimulationError` if the integrator stops."""
     value = problem.value if value is None else float(value)
     p, period = problem.build(value)
+    return _variational(problem, p, period, x, value, problem.t_start, problem.t_start + periods * period, samples)
+
+
+def segment_flow(problem: Problem, x, value: float, t0: float, t1: float, samples: int = 0) -> Flow:
+    """As :func:`flow`, from unknowns ``x`` at the time ``t0`` [s] to ``t1`` [s] (one
+    segment of a multiple-shooting run): its ``matrix`` is the segment's state-transition
+    matrix, saltation included."""
+    p, period = problem.build(float(value))
+    return _variational(problem, p, period, x, float(value), t0, t1, samples)
+
+
+def _variational(problem: Problem, p, period, x, value, t0, t1, samples) -> Flow:
     n = problem.template.size
     u = problem.unknowns
     y0 = _full(problem, np.asarray(x, dtype=float))
-    t0 = problem.t_start
-    t1 = t0 + periods * period
     count = max(samples, 2)
     times = np.linspace(t0, t1, count)
     start = np.concatenate([y0, np.eye(n).ravel()])
@@ -190,8 +211,16 @@ def shoot(problem: Problem, x, value: float, periods: int = 1) -> np.ndarray:
     ``t_start``, by the plain model without its state-transition matrix (several times
     cheaper: the matrix's error control takes the variational run's steps)."""
     p, period = problem.build(float(value))
-    t0 = problem.t_start
-    t1 = t0 + periods * period
+    return _plain(problem, p, period, x, value, problem.t_start, problem.t_start + periods * period)
+
+
+def segment_end(problem: Problem, x, value: float, t0: float, t1: float) -> np.ndarray:
+    """As :func:`shoot`, from unknowns ``x`` at the time ``t0`` [s] to ``t1`` [s]."""
+    p, period = problem.build(float(value))
+    return _plain(problem, p, period, x, value, t0, t1)
+
+
+def _plain(problem: Problem, p, period, x, value, t0, t1) -> np.ndarray:
     y, _, _, counters = driver.integrate(problem.system_id, p, _full(problem, np.asarray(x, dtype=float)), t0, t1,
                                          np.array([t1]), problem.rtol, problem.atol, period / 32.0,
                                          driver.METHOD_DOP853, 50_000_000, 100_000, True)
@@ -230,7 +259,7 @@ def make_orbit(problem: Problem, x, value, periods, run: Flow, iterations, resid
 
 
 def find_orbit(problem: Problem, start=None, value: float | None = None, periods: int = 1, tolerance: float = 1e-10,
-               max_iterations: int = 30, transient: int = 50) -> Orbit:
+               max_iterations: int = 30, transient: int = 50, segments: int = 1) -> Orbit:
     """A period-``periods`` orbit by Newton's method on the shooting residual (by the plain
     model, :func:`shoot`), its Jacobian ``M - I`` from a variational run renewed only when
     the residual stops shrinking fourfold per step (a chord method otherwise), and the
@@ -241,9 +270,11 @@ def find_orbit(problem: Problem, start=None, value: float | None = None, periods
     problem : Problem
         The system (:func:`~camdyn.continuation.problem.model_problem` or
         :func:`~camdyn.continuation.problem.system_problem`).
-    start : array_like (u,), optional
+    start : array_like (u,) or (segments, u), optional
         First guess of the unknowns; default the state after ``transient`` forcing periods
-        of plain simulation from the problem's template.
+        of plain simulation from the problem's template. With several segments, either
+        the states at every segment's start or one state, which a plain run carries to
+        the other segments' starts.
     value : float, optional
         The scalar parameter (default the problem's).
     periods : int
@@ -253,16 +284,26 @@ def find_orbit(problem: Problem, start=None, value: float | None = None, periods
         the state).
     max_iterations : int
         Newton iterations before giving up with :class:`SimulationError`.
+    segments : int
+        ``m``, the number of shooting segments: 1 is single shooting; more is multiple
+        shooting (:mod:`~camdyn.continuation.multiple`), for strongly unstable orbits.
 
     Returns
     -------
     Orbit
+        With multiple shooting its ``segment_states`` are the states at the segments'
+        starts, and its monodromy the product of the segments' matrices.
     """
     if int(periods) != periods or periods < 1:
         raise ParameterError(f"periods must be a positive integer, got {periods!r}")
     if not (tolerance > 0 and max_iterations >= 1):
         raise ParameterError("tolerance must be positive and max_iterations at least 1")
+    if isinstance(segments, bool) or int(segments) != segments or segments < 1:
+        raise ParameterError(f"segments must be a positive integer, got {segments!r}")
     value = problem.value if value is None else float(value)
+    if segments > 1:
+        return _find_segmented(problem, start, value, int(periods), tolerance, max_iterations, transient,
+                               int(segments))
     if start is None:
         x = transient_state(problem, transient, value)
     else:
@@ -288,3 +329,90 @@ def find_orbit(problem: Problem, start=None, value: float | None = None, periods
                           f"method did not converge in {max_iterations} iterations (last residual "
                           f"{float(np.linalg.norm(residual)):.3g}); start closer (a longer transient) or change "
                           f"the parameter")
+
+
+def _segment_starts(problem: Problem, start, value: float, times: np.ndarray, transient: int) -> np.ndarray:
+    """The first guess of every segment's start state, ``(m, u)``: given, or carried from
+    one state (given or after a transient) by a plain run through the boundaries."""
+    m, u = times.size - 1, problem.unknowns
+    if start is None:
+        start = transient_state(problem, transient, value)
+    states = np.asarray(start, dtype=float)
+    if states.shape not in ((u,), (m, u)) or not np.all(np.isfinite(states)):
+        raise ParameterError(f"start must be {u} finite numbers or {m} rows of them (one per segment)")
+    if states.shape == (m, u):
+        return states.copy()
+    p, period = problem.build(value)
+    y, _, _, counters = driver.integrate(problem.system_id, p, _full(problem, states), times[0], times[-1],
+                                         times[:-1].copy(), problem.rtol, problem.atol, period / 32.0,
+                                         driver.METHOD_DOP853, 50_000_000, 100_000, True)
+    limits.check_run(counters, "run to the segments' starts")
+    return y[:, :u].copy()
+
+
+def _join(problem: Problem, p: np.ndarray, runs: list[Flow], matrix: np.ndarray) -> Flow:
+    """One :class:`Flow` over the orbit from its segments' sampled runs (the first sample
+    of each later segment repeats the last of the one before and is dropped)."""
+    states = np.concatenate([runs[0].states] + [run.states[1:] for run in runs[1:]])
+    times = np.concatenate([runs[0].times] + [run.times[1:] for run in runs[1:]])
+    modes = np.concatenate([runs[0].modes] + [run.modes[1:] for run in runs[1:]])
+    return Flow(runs[-1].end, matrix, sum(run.impacts for run in runs), sum(run.events for run in runs),
+                _guard_minimum(problem.system_id, p, times, states), states, times, modes)
+
+
+def _segment_ends(problem: Problem, p: np.ndarray, period: float, states: np.ndarray, value: float,
+                  times: np.ndarray) -> np.ndarray | None:
+    """Every segment's end by the plain model, ``(m, u)``; None if a run fails (a start
+    beyond a rigid wall, say)."""
+    try:
+        return np.array([_plain(problem, p, period, states[i], value, times[i], times[i + 1])
+                         for i in range(times.size - 1)])
+    except SimulationError:
+        return None
+
+
+def _find_segmented(problem: Problem, start, value: float, periods: int, tolerance: float, max_iterations: int,
+                    transient: int, segments: int) -> Orbit:
+    """:func:`find_orbit` by multiple shooting: Newton's method on the continuity residuals
+    of :mod:`~camdyn.continuation.multiple` (each segment's end by the plain model), the
+    cyclic Jacobian from the segments' variational runs renewed as in single shooting
+    (chord steps while the residual shrinks fourfold per step). A Newton step whose trial
+    states make a run fail is halved, up to ``HALVINGS`` times."""
+    p, period = problem.build(value)
+    times = multiple.segment_times(problem.t_start, periods * period, segments)
+    states = _segment_starts(problem, start, value, times, transient)
+    ends = _segment_ends(problem, p, period, states, value, times)
+    if ends is None:
+        raise SimulationError(f"a shooting run from the start at {problem.name} = {value:g} failed")
+    jacobian, previous, size = None, math.inf, math.inf
+    for iteration in range(max_iterations + 1):
+        residuals = multiple.continuity(ends, states)
+        size = float(np.linalg.norm(residuals))
+        scale = 1.0 + np.linalg.norm(np.roll(states, -1, axis=0), axis=1)
+        if np.all(np.linalg.norm(residuals, axis=1) <= tolerance * scale):
+            samples = max(SAMPLES_PER_PERIOD * periods // segments, 16) + 1
+            runs = [_variational(problem, p, period, states[i], value, times[i], times[i + 1], samples)
+                    for i in range(segments)]
+            matrix = multiple.monodromy(np.array([run.matrix for run in runs]))
+            orbit = make_orbit(problem, states[0], value, periods, _join(problem, p, runs, matrix), iteration, size)
+            return replace(orbit, segment_states=states.copy())
+        if iteration == max_iterations:
+            break
+        if jacobian is None or not size < 0.25 * previous:       # chord steps while they contract fast
+            matrices = np.array([_variational(problem, p, period, states[i], value, times[i], times[i + 1],
+                                              0).matrix for i in range(segments)])
+            jacobian = multiple.cyclic_jacobian(matrices)
+        previous = size
+        step = multiple.newton_step(jacobian, residuals)
+        for _ in range(HALVINGS + 1):
+            ends = _segment_ends(problem, p, period, states + step, value, times)
+            if ends is not None:
+                break
+            step = 0.5 * step
+        else:
+            break
+        states = states + step
+    unit = f" {problem.unit}" if problem.unit else ""
+    raise SimulationError(f"no period-{periods} orbit found at {problem.name} = {value:g}{unit} with {segments} "
+                          f"shooting segments: Newton's method did not converge in {iteration} iterations "
+                          f"(last residual {size:.3g}); start closer or change the parameter")
