@@ -13,9 +13,9 @@ import math
 import numpy as np
 import pytest
 from scipy.linalg import expm
-from scipy.optimize import fsolve
+from scipy.optimize import brentq, fsolve
 
-from camdyn.continuation import find_orbit, model_problem
+from camdyn.continuation import continue_orbits, find_orbit, model_problem
 from camdyn.continuation.multiple import continuity, cyclic_jacobian, monodromy, newton_step
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.systems import registry as systems
@@ -226,3 +226,22 @@ def test_multiple_shooting_refuses_bad_input(stable):
         find_orbit(problem, start=[[0.0, math.nan], [0.0, 0.0]], segments=2)
     with pytest.raises(SimulationError, match="2 shooting segments: Newton's method did not converge"):
         find_orbit(problem, start=[[-0.5, 0.3], [-0.2, 0.1]], segments=2, max_iterations=1)
+
+
+def test_continuation_with_segments_locates_the_period_doubling_of_the_closed_form():
+    # the branch of single shooting's test (tests/test_continuation.py), continued with
+    # three segments from W = 2.3 to 3 rad/s; det(M + I) of the closed-form one-impact orbit vanishes where a multiplier is -1
+    def doubling(forcing):
+        values = _solve(forcing, 0.0, [1.1, -0.3]).multipliers()
+        return float(np.real(np.prod(values + 1.0)))
+    expected = brentq(doubling, 2.6, 2.7, xtol=1e-14)
+    problem = _problem(_solve(2.3, 0.0, [1.1, -0.5]))
+    start = find_orbit(problem, segments=3)
+    branch = continue_orbits(problem, start, 3.0, step=0.02)
+    assert [b.kind for b in branch.bifurcations] == ["period-doubling"]
+    assert abs(branch.bifurcations[0].parameter - expected) < 1e-9, (branch.bifurcations[0].parameter, expected)
+    assert "end of its range" in branch.stopped and len(branch.orbits) > 20
+    for orbit in branch.orbits[1::4]:                 # every segment's state on the closed form
+        closed = _solve(orbit.parameter, 0.0, [1.1, -0.4])
+        times = np.arange(3) * closed.period / 3
+        np.testing.assert_allclose(orbit.segment_states, [closed.state(t) for t in times], rtol=0, atol=1e-9)

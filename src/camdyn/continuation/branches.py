@@ -35,11 +35,21 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from camdyn.continuation.orbits import SAMPLES_PER_PERIOD, Flow, Orbit, flow, make_orbit, shoot
+from camdyn.continuation import multiple
+from camdyn.continuation.orbits import (
+    SAMPLES_PER_PERIOD,
+    Flow,
+    Orbit,
+    flow,
+    make_orbit,
+    segment_ends,
+    segment_runs,
+    shoot,
+)
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError, SimulationError
 
@@ -113,23 +123,51 @@ class _Point:
 class _Continuation:
     """The state of one continuation: the problem, the scales and the settings."""
 
-    def __init__(self, problem: Problem, periods: int, scales: np.ndarray, tolerance: float, max_corrections: int):
+    def __init__(self, problem: Problem, periods: int, scales: np.ndarray, tolerance: float, max_corrections: int,
+                 segments: int = 1):
         self.problem = problem
         self.periods = periods
         self.scales = scales
         self.tolerance = tolerance
         self.max_corrections = max_corrections
-        self.u = problem.unknowns
+        self.segments = segments
+        self.u = problem.unknowns * segments
         self.orientation = 0.0      # sign of det([J; t]) along the branch, set at its first point
 
     def unscale(self, z: np.ndarray) -> tuple[np.ndarray, float]:
         u = z * self.scales
         return u[:-1], float(u[-1])
 
+    def pack(self, orbit: Orbit) -> np.ndarray:
+        """The unscaled unknowns ``(x, lambda)`` of ``orbit`` (every segment's state with
+        multiple shooting)."""
+        states = orbit.state if self.segments == 1 else orbit.segment_states.ravel()
+        return np.r_[states, orbit.parameter]
+
+    def _ends(self, x: np.ndarray, value: float) -> np.ndarray:
+        """Every segment's end, stacked (the end of the period with one segment)."""
+        if self.segments == 1:
+            return shoot(self.problem, x, value, self.periods)
+        return segment_ends(self.problem, x.reshape(self.segments, -1), value, self.periods).ravel()
+
+    def _gap(self, ends: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """The residual from the ends: ``G`` or the continuity conditions, stacked."""
+        if self.segments == 1:
+            return ends - x
+        return multiple.continuity(ends.reshape(self.segments, -1), x.reshape(self.segments, -1)).ravel()
+
     def residual(self, z: np.ndarray) -> np.ndarray:
         """Scaled residual ``G / s_x`` at scaled ``z``, by the plain model."""
         x, value = self.unscale(z)
-        return (shoot(self.problem, x, value, self.periods) - x) / self.scales[:-1]
+        return self._gap(self._ends(x, value), x) / self.scales[:-1]
+
+    def _run(self, x: np.ndarray, value: float) -> tuple[Flow, np.ndarray]:
+        """The sampled variational run and the Jacobian of the residual in the states."""
+        if self.segments == 1:
+            run = flow(self.problem, x, value, self.periods, SAMPLES_PER_PERIOD * self.periods)
+            return run, run.matrix - np.eye(self.u)
+        run, matrices = segment_runs(self.problem, x.reshape(self.segments, -1), value, self.periods, sampled=True)
+        return run, multiple.cyclic_jacobian(matrices)
 
     def linearization(self, z: np.ndarray) -> tuple[Flow, np.ndarray, np.ndarray]:
         """The variational run at scaled ``z`` (sampled), the scaled Jacobian
@@ -137,23 +175,26 @@ class _Continuation:
         estimate of the scaled residual (the mean of the two differenced runs, exact to
         ``O(h^2)``: what the orbit reports, never what Newton's method solves)."""
         x, value = self.unscale(z)
-        run = flow(self.problem, x, value, self.periods, SAMPLES_PER_PERIOD * self.periods)
+        run, states_jacobian = self._run(x, value)
         h = 1e-6 * self.scales[-1]
-        plus = shoot(self.problem, x, value + h, self.periods)
-        minus = shoot(self.problem, x, value - h, self.periods)
+        plus = self._ends(x, value + h)
+        minus = self._ends(x, value - h)
         jac = np.empty((self.u, self.u + 1))
-        jac[:, :-1] = run.matrix - np.eye(self.u)
+        jac[:, :-1] = states_jacobian
         jac[:, -1] = (plus - minus) / (2.0 * h)                        # central difference
         sx = self.scales[:-1]
-        return run, jac * self.scales[None, :] / sx[:, None], (0.5 * (plus + minus) - x) / sx
+        return run, jac * self.scales[None, :] / sx[:, None], self._gap(0.5 * (plus + minus), x) / sx
 
     def point(self, z: np.ndarray, previous: np.ndarray, iterations: int) -> _Point:
         """The converged point at ``z``: its orbit (monodromy and multipliers from the
         variational run), its Jacobian and the tangent oriented along ``previous``."""
         run, jac, residual = self.linearization(z)
         x, value = self.unscale(z)
-        orbit = make_orbit(self.problem, x, value, self.periods, run, iterations,
+        states = x.reshape(self.segments, -1)
+        orbit = make_orbit(self.problem, states[0], value, self.periods, run, iterations,
                            float(np.linalg.norm(residual * self.scales[:-1])))
+        if self.segments > 1:
+            orbit = replace(orbit, segment_states=states.copy())
         vector = np.linalg.svd(jac)[2][-1]                               # the null vector
         return _Point(z, self.orient(jac, vector, previous), orbit, iterations, jac)
 
@@ -277,7 +318,7 @@ def _detect(job: _Continuation, a: _Point, b: _Point) -> list[Bifurcation]:
         point = _locate(job, a, b, "grazing")
         if point is not None:
             found.append(Bifurcation("grazing", point.orbit.parameter, point.orbit))
-    return sorted(found, key=lambda item: float(a.tangent @ (np.r_[item.orbit.state, item.parameter] / job.scales)))
+    return sorted(found, key=lambda item: float(a.tangent @ (job.pack(item.orbit) / job.scales)))
 
 
 def _grazing_end(orbits: list[Orbit]) -> list[Bifurcation]:
@@ -336,6 +377,8 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         The system and its scalar parameter.
     start : Orbit
         A converged orbit (:func:`~camdyn.continuation.orbits.find_orbit`) of ``problem``.
+        One found by multiple shooting (``segments=m``) is continued with the same ``m``
+        segments: the unknowns are then every segment's state and the parameter.
     stop : float
         The parameter's far end [its unit]: continuation starts towards it and ends when
         the parameter leaves the interval between ``start.parameter`` and ``stop`` (the
@@ -365,9 +408,12 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
     if not hi > lo:
         raise ParameterError(f"stop must differ from the start {start.parameter}")
     direction = 1.0 if stop > start.parameter else -1.0
+    segments = 1 if start.segment_states is None else start.segment_states.shape[0]
     scales = continuation_scales(start)
-    job = _Continuation(problem, start.periods, scales, tolerance, max_corrections)
-    z0 = np.r_[start.state, start.parameter] / scales
+    if segments > 1:                                           # every segment's state scaled alike
+        scales = np.r_[np.tile(scales[:-1], segments), scales[-1]]
+    job = _Continuation(problem, start.periods, scales, tolerance, max_corrections, segments)
+    z0 = job.pack(start) / scales
     seed = np.zeros(z0.size)
     seed[-1] = direction
     point = job.point(z0, seed, start.iterations)

@@ -30,8 +30,8 @@ from camdyn.integrator import driver
 from camdyn.simulation import limits
 from camdyn.systems import registry as systems
 
-__all__ = ["Flow", "Orbit", "flow", "find_orbit", "make_orbit", "segment_end", "segment_flow", "shoot",
-           "transient_state", "STABILITY_MARGIN"]
+__all__ = ["Flow", "Orbit", "flow", "find_orbit", "make_orbit", "segment_ends",
+           "segment_runs", "shoot", "transient_state", "STABILITY_MARGIN"]
 
 #: A multiplier counts as inside the unit circle when its modulus is below 1 - this [-].
 STABILITY_MARGIN = 1e-7
@@ -157,14 +157,6 @@ def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samp
     return _variational(problem, p, period, x, value, problem.t_start, problem.t_start + periods * period, samples)
 
 
-def segment_flow(problem: Problem, x, value: float, t0: float, t1: float, samples: int = 0) -> Flow:
-    """As :func:`flow`, from unknowns ``x`` at the time ``t0`` [s] to ``t1`` [s] (one
-    segment of a multiple-shooting run): its ``matrix`` is the segment's state-transition
-    matrix, saltation included."""
-    p, period = problem.build(float(value))
-    return _variational(problem, p, period, x, float(value), t0, t1, samples)
-
-
 def _variational(problem: Problem, p, period, x, value, t0, t1, samples) -> Flow:
     n = problem.template.size
     u = problem.unknowns
@@ -212,12 +204,6 @@ def shoot(problem: Problem, x, value: float, periods: int = 1) -> np.ndarray:
     cheaper: the matrix's error control takes the variational run's steps)."""
     p, period = problem.build(float(value))
     return _plain(problem, p, period, x, value, problem.t_start, problem.t_start + periods * period)
-
-
-def segment_end(problem: Problem, x, value: float, t0: float, t1: float) -> np.ndarray:
-    """As :func:`shoot`, from unknowns ``x`` at the time ``t0`` [s] to ``t1`` [s]."""
-    p, period = problem.build(float(value))
-    return _plain(problem, p, period, x, value, t0, t1)
 
 
 def _plain(problem: Problem, p, period, x, value, t0, t1) -> np.ndarray:
@@ -360,13 +346,42 @@ def _join(problem: Problem, p: np.ndarray, runs: list[Flow], matrix: np.ndarray)
                 _guard_minimum(problem.system_id, p, times, states), states, times, modes)
 
 
-def _segment_ends(problem: Problem, p: np.ndarray, period: float, states: np.ndarray, value: float,
-                  times: np.ndarray) -> np.ndarray | None:
-    """Every segment's end by the plain model, ``(m, u)``; None if a run fails (a start
-    beyond a rigid wall, say)."""
+def segment_ends(problem: Problem, states, value: float, periods: int = 1) -> np.ndarray:
+    """Each segment's end ``phi_i(x_i)`` by the plain model, ``(m, u)``, for the states
+    ``states`` ``(m, u)`` at the ``m`` equally spaced times of ``periods`` forcing periods
+    from ``t_start`` (:func:`~camdyn.continuation.multiple.segment_times`); raises
+    :class:`SimulationError` if a run fails."""
+    states = np.asarray(states, dtype=float)
+    p, period = problem.build(float(value))
+    times = multiple.segment_times(problem.t_start, periods * period, states.shape[0])
+    return np.array([_plain(problem, p, period, states[i], value, times[i], times[i + 1])
+                     for i in range(states.shape[0])])
+
+
+def segment_runs(problem: Problem, states, value: float, periods: int = 1,
+                 sampled: bool = False) -> tuple[Flow, np.ndarray]:
+    """The segments' variational runs from ``states`` ``(m, u)`` (as :func:`segment_ends`):
+    their state-transition matrices ``(m, u, u)``, and one :class:`Flow` over the whole
+    orbit whose matrix is their product, the monodromy (sampled, ``SAMPLES_PER_PERIOD``
+    per forcing period, when ``sampled``)."""
+    states = np.asarray(states, dtype=float)
+    m = states.shape[0]
+    p, period = problem.build(float(value))
+    times = multiple.segment_times(problem.t_start, periods * period, m)
+    samples = max(SAMPLES_PER_PERIOD * periods // m, 16) + 1 if sampled else 0
+    runs = [_variational(problem, p, period, states[i], value, times[i], times[i + 1], samples) for i in range(m)]
+    matrices = np.array([run.matrix for run in runs])
+    matrix = multiple.monodromy(matrices)
+    if not sampled:
+        return Flow(runs[-1].end, matrix, sum(run.impacts for run in runs), sum(run.events for run in runs),
+                    math.nan, runs[-1].states, runs[-1].times, runs[-1].modes), matrices
+    return _join(problem, p, runs, matrix), matrices
+
+
+def _segment_ends(problem: Problem, states: np.ndarray, value: float, periods: int) -> np.ndarray | None:
+    """:func:`segment_ends`, or None if a run fails (a start beyond a rigid wall, say)."""
     try:
-        return np.array([_plain(problem, p, period, states[i], value, times[i], times[i + 1])
-                         for i in range(times.size - 1)])
+        return segment_ends(problem, states, value, periods)
     except SimulationError:
         return None
 
@@ -378,10 +393,10 @@ def _find_segmented(problem: Problem, start, value: float, periods: int, toleran
     cyclic Jacobian from the segments' variational runs renewed as in single shooting
     (chord steps while the residual shrinks fourfold per step). A Newton step whose trial
     states make a run fail is halved, up to ``HALVINGS`` times."""
-    p, period = problem.build(value)
+    _, period = problem.build(value)
     times = multiple.segment_times(problem.t_start, periods * period, segments)
     states = _segment_starts(problem, start, value, times, transient)
-    ends = _segment_ends(problem, p, period, states, value, times)
+    ends = _segment_ends(problem, states, value, periods)
     if ends is None:
         raise SimulationError(f"a shooting run from the start at {problem.name} = {value:g} failed")
     jacobian, previous, size = None, math.inf, math.inf
@@ -390,22 +405,17 @@ def _find_segmented(problem: Problem, start, value: float, periods: int, toleran
         size = float(np.linalg.norm(residuals))
         scale = 1.0 + np.linalg.norm(np.roll(states, -1, axis=0), axis=1)
         if np.all(np.linalg.norm(residuals, axis=1) <= tolerance * scale):
-            samples = max(SAMPLES_PER_PERIOD * periods // segments, 16) + 1
-            runs = [_variational(problem, p, period, states[i], value, times[i], times[i + 1], samples)
-                    for i in range(segments)]
-            matrix = multiple.monodromy(np.array([run.matrix for run in runs]))
-            orbit = make_orbit(problem, states[0], value, periods, _join(problem, p, runs, matrix), iteration, size)
+            run, _ = segment_runs(problem, states, value, periods, sampled=True)
+            orbit = make_orbit(problem, states[0], value, periods, run, iteration, size)
             return replace(orbit, segment_states=states.copy())
         if iteration == max_iterations:
             break
         if jacobian is None or not size < 0.25 * previous:       # chord steps while they contract fast
-            matrices = np.array([_variational(problem, p, period, states[i], value, times[i], times[i + 1],
-                                              0).matrix for i in range(segments)])
-            jacobian = multiple.cyclic_jacobian(matrices)
+            jacobian = multiple.cyclic_jacobian(segment_runs(problem, states, value, periods)[1])
         previous = size
         step = multiple.newton_step(jacobian, residuals)
         for _ in range(HALVINGS + 1):
-            ends = _segment_ends(problem, p, period, states + step, value, times)
+            ends = _segment_ends(problem, states + step, value, periods)
             if ends is not None:
                 break
             step = 0.5 * step
