@@ -193,7 +193,8 @@ def test_multiple_shooting_keeps_the_large_multiplier_accurate():
     single = find_orbit(problem, start=orbit.state(problem.t_start), periods=5)
     times = problem.t_start + np.arange(10) * orbit.period / 2
     multiple = find_orbit(problem, start=[orbit.state(t) for t in times], periods=5, segments=10)
-    single_error, multiple_error = abs(single.multipliers[0] / expected - 1), abs(multiple.multipliers[0] / expected - 1)
+    single_error = abs(single.multipliers[0] / expected - 1)
+    multiple_error = abs(multiple.multipliers[0] / expected - 1)
     assert multiple_error < 1e-8 and multiple_error < single_error / 10, (single_error, multiple_error)
 
 
@@ -230,7 +231,8 @@ def test_multiple_shooting_refuses_bad_input(stable):
 
 def test_continuation_with_segments_locates_the_period_doubling_of_the_closed_form():
     # the branch of single shooting's test (tests/test_continuation.py), continued with
-    # three segments from W = 2.3 to 3 rad/s; det(M + I) of the closed-form one-impact orbit vanishes where a multiplier is -1
+    # three segments from W = 2.3 to 3 rad/s; det(M + I) of the closed-form one-impact
+    # orbit vanishes where a multiplier is -1
     def doubling(forcing):
         values = _solve(forcing, 0.0, [1.1, -0.3]).multipliers()
         return float(np.real(np.prod(values + 1.0)))
@@ -245,3 +247,34 @@ def test_continuation_with_segments_locates_the_period_doubling_of_the_closed_fo
         closed = _solve(orbit.parameter, 0.0, [1.1, -0.4])
         times = np.arange(3) * closed.period / 3
         np.testing.assert_allclose(orbit.segment_states, [closed.state(t) for t in times], rtol=0, atol=1e-9)
+
+
+def test_continue_cli_with_segments_ends_on_the_single_shooting_orbit(capsys):
+    # the chapter 4 rig (e/a = 0.05) from 11.55 to 12 Hz with two segments: the branch's
+    # last orbit, at 12 Hz, is the one single shooting finds there on its own
+    import json
+
+    import camdyn
+    from camdyn.cli.app import main
+    from camdyn.continuation import system_problem
+
+    assert main(["continue", "sundar2014-friction", "--set", "cam.runout=0.875mm", "--from", "11.55Hz", "--to",
+                 "12Hz", "--segments", "2", "--doublings", "0", "--json", "--quiet"]) == 0
+    last = json.loads(capsys.readouterr().out)["branches"][0][-1]
+    assert last["parameter"] == pytest.approx(12.0, abs=1e-12)
+    system = camdyn.load_system("sundar2014-friction").with_values(**{"cam.runout": 0.875e-3, "motion.speed": 12.0})
+    single = find_orbit(system_problem(system, "motion.speed"), transient=1)
+    np.testing.assert_allclose(last["state"], single.state, rtol=0, atol=1e-9)              # measured 9e-12
+    multipliers = np.array([complex(*pair) for pair in last["multipliers"]])
+    np.testing.assert_allclose(multipliers, single.multipliers, rtol=0, atol=1e-9)         # measured 6e-11
+
+
+@pytest.mark.parametrize("source, args, words", [
+    ("sundar2014-friction", ["--segments", "0"], "--segments"),
+    ("alzate", ["--segments", "2"], "single shooting"),
+])
+def test_continue_cli_refuses_bad_segments_in_one_line(source, args, words, capsys):
+    from camdyn.cli.app import main
+    assert main(["continue", source, "--from", "11Hz", "--to", "12Hz", *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error:") and words in err[0], err

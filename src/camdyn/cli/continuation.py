@@ -30,6 +30,8 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                     start: str = typer.Option(..., "--from", help="First value, with a unit: 5Hz, 1.2mm."),
                     stop: str = typer.Option(..., "--to", help="Last value, with a unit."),
                     period: int = typer.Option(1, help="Forcing periods per orbit period (2 for period-2 orbits)."),
+                    segments: int = typer.Option(1, help="Shooting segments per orbit period: more than 1 is "
+                                                         "multiple shooting, for strongly unstable orbits."),
                     step: float = typer.Option(0.02, help="First arclength step, relative to the parameter's "
                                                           "start value [-]."),
                     max_points: int = typer.Option(200, help="Most orbits on the branch."),
@@ -59,7 +61,12 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     check_outputs(netcdf=out, figure=plot, force=force)
     from camdyn.params.profiles import is_translating
 
+    if segments < 1:
+        raise ParameterError(f"--segments must be at least 1, got {segments}")
     if is_translating(source):
+        if segments != 1:
+            raise ParameterError("--segments is for the cam-follower; the translating follower is continued by "
+                                 "single shooting")
         from camdyn.cli.translating import continue_translating_command
         continue_translating_command(source, set_, parameter, start, stop, period, step, max_points, transient,
                                      doublings, brute_force, plot, out, quiet, json_)
@@ -78,7 +85,8 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         raise ParameterError("--doublings must be at least 0, --brute-force 0 or at least 2")
     if brute_force and plot is None:
         raise ParameterError("--brute-force draws the diagram under the branches of --plot: give --plot")
-    problem, branch = _trace(system, parameter, first, last, period, step, max_points, transient, quiet or json_)
+    problem, branch = _trace(system, parameter, first, last, period, step, max_points, transient, quiet or json_,
+                             segments)
     branches = [branch, *switch_doublings(problem, branch, last, doublings, step, max_points)]
     records = [branch_records(problem, b) for b in branches]
     bifurcations = bifurcation_records(branches)
@@ -132,12 +140,12 @@ def _brute_force(source, set_, parameter, first, last, count, quiet):
     return diagram
 
 
-def _trace(system, parameter, first, last, period, step, max_points, transient, quiet):
+def _trace(system, parameter, first, last, period, step, max_points, transient, quiet, segments):
     """The branch, with a progress bar over the parameter range unless ``quiet``."""
     from camdyn.continuation.results import trace_branch
 
     if quiet:
-        return trace_branch(system, parameter, first, last, period, step, max_points, transient)
+        return trace_branch(system, parameter, first, last, period, step, max_points, transient, segments=segments)
     from rich.progress import Progress
 
     with Progress(console=err_console, transient=True) as bar:
@@ -145,4 +153,5 @@ def _trace(system, parameter, first, last, period, step, max_points, transient, 
 
         def progress(orbit):
             bar.update(task, completed=min(max((orbit.parameter - first) / (last - first), 0.0), 1.0))
-        return trace_branch(system, parameter, first, last, period, step, max_points, transient, progress=progress)
+        return trace_branch(system, parameter, first, last, period, step, max_points, transient, progress=progress,
+                            segments=segments)

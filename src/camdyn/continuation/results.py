@@ -23,11 +23,12 @@ __all__ = ["trace_branch", "switch_doublings", "orbit_record", "branch_records",
 
 def trace_branch(system: System, key: str, start: float, stop: float, periods: int = 1, step: float = 0.02,
                  max_points: int = 200, transient: int = 50, rtol: float = 1e-10,
-                 progress: Callable[[Orbit], None] | None = None) -> tuple[Problem, Branch]:
+                 progress: Callable[[Orbit], None] | None = None, segments: int = 1) -> tuple[Problem, Branch]:
     """The branch of period-``periods`` orbits of ``system`` from the parameter ``key``
     [SI unit] at ``start`` towards ``stop``: the orbit at ``start`` from a transient of
     ``transient`` forcing periods and Newton's method, then pseudo-arclength continuation
-    (:func:`~camdyn.continuation.branches.continue_orbits`, steps in scaled units).
+    (:func:`~camdyn.continuation.branches.continue_orbits`, steps in scaled units), by
+    multiple shooting over ``segments`` segments when more than 1.
 
     Raises
     ------
@@ -40,11 +41,13 @@ def trace_branch(system: System, key: str, start: float, stop: float, periods: i
         raise ParameterError(f"the range must be two different finite values, got {start} and {stop}")
     if int(periods) != periods or periods < 1:
         raise ParameterError(f"the period must be a positive integer number of forcing periods, got {periods}")
+    if isinstance(segments, bool) or int(segments) != segments or segments < 1:
+        raise ParameterError(f"the number of shooting segments must be a positive integer, got {segments}")
     if transient < 1 or max_points < 2 or not step >= MIN_STEP:
         raise ParameterError(f"transient must be at least 1, max_points at least 2 and step at least {MIN_STEP:g}")
     problem = system_problem(system.with_values(**{key: start}), key, rtol=rtol, atol=rtol * 1e-2)
     problem.build(stop)                                       # refuse an end value the system cannot take
-    orbit = find_orbit(problem, periods=int(periods), transient=transient)
+    orbit = find_orbit(problem, periods=int(periods), transient=transient, segments=int(segments))
     branch = continue_orbits(problem, orbit, stop, step=step, max_step=max(step, 0.1), max_points=max_points,
                              progress=progress)
     return problem, branch
