@@ -195,7 +195,10 @@ def test_multiple_shooting_keeps_the_large_multiplier_accurate():
     multiple = find_orbit(problem, start=[orbit.state(t) for t in times], periods=5, segments=10)
     single_error = abs(single.multipliers[0] / expected - 1)
     multiple_error = abs(multiple.multipliers[0] / expected - 1)
-    assert multiple_error < 1e-8 and multiple_error < single_error / 10, (single_error, multiple_error)
+    # measured: single 6.9e-6 (after 15 Newton iterations on a residual whose noise the
+    # multiplier amplifies), multiple 8.9e-9 (0 iterations); the bound is the integration
+    # tolerance (1e-10) times the segments' amplification, with margin
+    assert multiple_error < 1e-7 and multiple_error < single_error / 100, (single_error, multiple_error)
 
 
 def test_cyclic_jacobian_solves_a_linear_periodic_map_in_one_step():
