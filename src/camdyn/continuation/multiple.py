@@ -69,7 +69,7 @@ def newton_step(jacobian: np.ndarray, residuals: np.ndarray) -> np.ndarray:
 
 def monodromy(matrices: np.ndarray) -> np.ndarray:
     """The monodromy matrix at ``t_0``: the product of the segments' matrices ``(m, u,
-    u)``, the last leftmost (``A_{m-1} ... A_1 A_0``). Formed plainly: its eigenvalues are as accurate as the
+    u)``, the last leftmost. Formed plainly: its eigenvalues are as accurate as the
     product's entries, which is enough while the largest multiplier's modulus times the
     integration tolerance stays well below 1 (a periodic Schur decomposition would keep
     the small multipliers' accuracy beside very large ones)."""
