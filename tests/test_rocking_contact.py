@@ -29,6 +29,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from test_rocking_roller import (
     ARM,
+    CYCLOIDAL,
     INERTIA,
     PIVOT,
     PRELOAD,
@@ -44,8 +45,9 @@ from camdyn.cli.app import main
 from camdyn.errors import ParameterError, UnknownKeyError
 from camdyn.io.rocking_config import load_rocking
 from camdyn.model.lift_laws import CUBIC
-from camdyn.model.profiles import Profile, eccentric_circle
-from camdyn.simulation.rocking_roller import RockingFollower, rocking_liftoff_speed, simulate_rocking
+from camdyn.model.profiles import Profile, eccentric_circle, rise_return_profile
+from camdyn.model.rocking_roller import RockingGeometry, contact_configuration, surface_curvature
+from camdyn.simulation.rocking_roller import RockingFollower, rocking_liftoff_speed, rocking_table, simulate_rocking
 from camdyn.simulation.translating import TranslatingFollower, simulate_translating
 from camdyn.simulation.translating_contact import HertzContact
 
@@ -334,3 +336,48 @@ def test_simulate_runs_a_compliant_configuration_and_refuses_a_bad_law():
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err := io.StringIO()):
         status = main(["simulate", str(EXAMPLE), "--set", "contact.law=soft"])
     assert status == 2 and "contact.law" in err.getvalue() and "Traceback" not in err.getvalue()
+
+
+def _cycloidal_lift(u, lift=0.008, beta=2 * math.pi / 3):
+    """``(s, s', s'')`` [m, m/rad, m/rad^2] of the cycloidal rise-dwell-return cam of
+    test_rocking_roller.py, written here: ``s = L (x - sin(2 pi x) / (2 pi))``, ``x = u /
+    beta``, on the rise, mirrored on the return."""
+    u = u % (2 * math.pi)
+    if u < beta or math.pi <= u < math.pi + beta:
+        x = (u % math.pi) / beta
+        sign = 1.0 if u < beta else -1.0
+        s = lift * (x - math.sin(2 * math.pi * x) / (2 * math.pi))
+        return (s if sign > 0 else lift - s, sign * lift * (1 - math.cos(2 * math.pi * x)) / beta,
+                sign * lift * 2 * math.pi * math.sin(2 * math.pi * x) / beta ** 2)
+    return (lift if u < math.pi else 0.0), 0.0, 0.0
+
+
+@pytest.mark.parametrize("face", ["flat", "roller"])
+def test_the_cam_curvature_at_the_contact_matches_the_cam_drawn_here(face):
+    """The cam surface's curvature at the arm's contact on the cycloidal cam (base 30 mm,
+    roller 8 mm), against the cam written here: for the profile made for a flat face, the
+    support function's radius of curvature ``h + h''`` with ``h = r_base + s`` (Rothbart
+    2004); for the roller profile, the pitch curve in polar form ``r = r_base + r_r +
+    s(u)`` at the polar angle ``pi/2 - u``, whose radius of curvature is ``(r^2 +
+    r'^2)^1.5 / (r^2 + 2 r'^2 - r r'')`` (``r' = -s'``, ``r'' = s''``), less the roller's
+    radius. At 40 random cam angles to 1e-9 relative (measured 2e-16 and 3e-16); the
+    table (straight lines between 8192 samples) between its samples within 1e-5 relative
+    (measured 3e-7, its error ``h^2 kappa'' / 8``)."""
+    roller = 0.008
+    profile = rise_return_profile(CYCLOIDAL, 0.03, follower=face, roller_radius=roller if face == "roller" else 0.0)
+    geometry = RockingGeometry(profile, -0.07, 0.04, 0.07, roller, 1)
+    theta = np.random.default_rng(11).uniform(0.0, 2 * math.pi, 40)
+    config = contact_configuration(geometry, theta)
+    expected = []
+    for u in config.parameter:
+        s, s1, s2 = _cycloidal_lift(u)
+        if face == "flat":
+            expected.append(1 / (0.03 + s + s2))
+        else:
+            r = 0.03 + roller + s
+            expected.append(1 / ((r * r + s1 * s1) ** 1.5 / (r * r + 2 * s1 * s1 - r * s2) - roller))
+    curvature = surface_curvature(geometry, config.parameter)
+    table = rocking_table(geometry, 8192).curvature.lift(theta)[0]
+    print(f"{face}: {np.abs(curvature / expected - 1).max():.1e}, table {np.abs(table / curvature - 1).max():.1e}")
+    np.testing.assert_allclose(curvature, expected, rtol=1e-9)
+    np.testing.assert_allclose(table, curvature, rtol=1e-5)
