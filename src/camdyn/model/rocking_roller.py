@@ -63,7 +63,8 @@ import numpy as np
 from camdyn.errors import GeometryError, ParameterError
 from camdyn.model import profiles
 
-__all__ = ["RockingGeometry", "ContactConfiguration", "contact_configuration", "pitch_points", "lift_values"]
+__all__ = ["RockingGeometry", "ContactConfiguration", "contact_configuration", "pitch_points", "lift_values",
+           "surface_curvature"]
 
 #: Points of the pitch curve on which the contacts are bracketed.
 GRID = 2048
@@ -196,6 +197,22 @@ def pitch_points(geometry, u):
     a, b = q[0]
     da, db = q[1, 0] + b, q[1, 1] - a
     return (np.array([a * c + b * s, -a * s + b * c]), np.array([da * c + db * s, -da * s + db * c]))
+
+
+def surface_curvature(geometry, u):
+    """Curvature ``kappa_cam`` [1/m] of the cam's surface where the pitch curve's parameter
+    is ``u`` [rad]: the pitch curve's radius of curvature ``rho_p = |w|^3 / (w x z)`` with
+    ``w = (a' + b, b' - a)`` and ``z = w' + (w_y, -w_x) = (a'' + 2 b' - a, b'' - 2 a' - b)``
+    (``P' = R(-u) w``, ``P'' = R(-u) z``; the sign of
+    :func:`camdyn.model.profiles.curvature_terms`, positive where convex), less the roller's
+    radius (the surface is the pitch curve's inner offset by ``r_r``): ``kappa_cam = 1 /
+    (rho_p - r_r)``                                                                 (K5)"""
+    q = pitch_coordinates(geometry, u, order=2)
+    a, b = q[0]
+    wx, wy = q[1, 0] + b, q[1, 1] - a
+    zx, zy = q[2, 0] + 2.0 * q[1, 1] - a, q[2, 1] - 2.0 * q[1, 0] - b
+    rho = (wx * wx + wy * wy) ** 1.5 / (wy * zx - wx * zy)
+    return 1.0 / (rho - geometry.roller_radius)
 
 
 def _check_pitch_curve(geometry):

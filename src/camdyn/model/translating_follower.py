@@ -49,6 +49,25 @@ Two contact laws:
   pressure angle is neglected in the contact law; the kinematics of a knife edge stay
   those of a sharp edge (its tip radius enters the stiffness only).
 
+**A rocking arm** runs on this model with the arm's lift angle as ``x`` [rad] and the
+contact angle as the lift ``s`` [rad] (:mod:`camdyn.simulation.rocking_roller`). Its Hertz
+law then reads two more tables beside the profile's, sampled over the cam angle: the lever
+``L_n(theta)`` [m] of the contact normal about the pivot and, for point contact, the
+curvature ``kappa_cam(theta)`` [1/m] of the cam's surface at the contact (taking the place
+of eq. 7's). To first order in the penetration the normal penetration, its rate and the
+approach velocity are::
+
+    delta_n = L_n delta,  delta_n' = L_n delta' + omega L_n' delta,  v_n = L_n (s_dot - x')   (8)
+
+with ``delta = s - x`` [rad] and ``L_n' = dL_n/dtheta`` [m/rad]; the normal force ``N(delta_n,
+delta_n')`` [N] of eqs. (4)-(7) acts on the arm with the moment::
+
+    M = L_n N                                                                  (9)
+
+[N m], the ``contact_force`` of this model. The slots ``LEVER`` and ``CURVATURE`` hold
+where the two tables start in ``p`` (0 without them: a translating follower, whose
+results they leave unchanged).
+
 State ``(x [m], x' [m/s])``; mode ``(contact, approach)``: 0 in flight, 1 in contact, and
 the approach velocity [m/s] of the current contact (Hertz law).
 
@@ -88,7 +107,9 @@ FACE = 18           # 0 flat, 1 knife, 2 roller
 PRIME_RADIUS = 19   # r_base + r_r [m]
 OFFSET = 20         # epsilon [m]
 ROLLER_RADIUS = 21  # r_r [m]
-PROFILE = 22
+LEVER = 22          # start in p of the normal's lever table of a rocking arm (0: none, a translating follower)
+CURVATURE = 23      # start in p of the arm's cam-curvature table (0: none)
+PROFILE = 24
 RIGID = 0.0
 COMPLIANT = 1.0
 HERTZ = 2.0
@@ -130,7 +151,10 @@ def equivalent_curvature(theta, p):
     """``1/rho_e`` [1/m] of point contact at the cam angle ``theta`` [rad]: ``kappa_cam +
     1/r_f`` (eq. 7), the cam surface's curvature ``kappa_cam`` [1/m] from the pitch curve's
     ``kappa_p`` (a roller's surface is the pitch curve's inner offset by ``r_r``:
-    ``kappa_cam = kappa_p / (1 - r_r kappa_p)``)."""
+    ``kappa_cam = kappa_p / (1 - r_r kappa_p)``); for a rocking arm, ``kappa_cam`` from
+    its curvature table."""
+    if p[CURVATURE] != 0.0:   # a rocking arm: the cam surface's curvature sampled at its contact
+        return profiles.evaluate(p, int(p[CURVATURE]), theta)[0] + 1.0 / p[FOLLOWER_RADIUS]
     s, s1, s2, _ = profiles.evaluate(p, PROFILE, theta)
     speed_cubed, cross = profiles.pitch_curvature_terms(theta, s, s1, s2, p[PRIME_RADIUS], p[OFFSET])
     kappa = cross / speed_cubed
@@ -148,12 +172,33 @@ def equivalent_radius(theta, p):
 @numba.njit(cache=True)
 def hertz_force(theta, delta, rate, approach, p):
     """The Hertz law's force N [N] (eqs. 4-7) at the penetration ``delta`` [m], its rate
-    [m/s], the cam angle ``theta`` [rad] and the contact's approach velocity [m/s]."""
+    [m/s], the cam angle ``theta`` [rad] and the contact's approach velocity [m/s]; for a
+    rocking arm (a lever table in ``p``) the moment ``L_n N`` [N m] (eqs. 8-9) at the
+    angular penetration ``delta`` [rad] and its rate [rad/s], the approach velocity the
+    normal one [m/s]."""
     line = p[CONTACT_KIND] != 0.0
     rho_e = 0.0 if line else equivalent_radius(theta, p)
-    kd = hertz.stiffness_at(line, p[MODULUS], rho_e, p[WIDTH], delta)
-    return hertz.damped_force(delta, rate, kd, approach, int(p[DAMPING_LAW]), p[CONTACT_DAMPING], 0.0, 0.0,
-                              p[RESTITUTION], p[V_REFERENCE], False)[0]
+    if p[LEVER] == 0.0:
+        kd = hertz.stiffness_at(line, p[MODULUS], rho_e, p[WIDTH], delta)
+        return hertz.damped_force(delta, rate, kd, approach, int(p[DAMPING_LAW]), p[CONTACT_DAMPING], 0.0, 0.0,
+                                  p[RESTITUTION], p[V_REFERENCE], False)[0]
+    # a rocking arm: the normal penetration L_n delta and its rate (eq. 8), the moment L_n N (eq. 9)
+    lever, slope, _, _ = profiles.evaluate(p, int(p[LEVER]), theta)
+    normal = lever * delta
+    normal_rate = lever * rate + p[SPEED] * slope * delta
+    kd = hertz.stiffness_at(line, p[MODULUS], rho_e, p[WIDTH], normal)
+    return lever * hertz.damped_force(normal, normal_rate, kd, approach, int(p[DAMPING_LAW]), p[CONTACT_DAMPING],
+                                      0.0, 0.0, p[RESTITUTION], p[V_REFERENCE], False)[0]
+
+
+@numba.njit(cache=True)
+def approach_velocity(t, y, p):
+    """The approach velocity [m/s] of a penalty contact starting at ``t`` [s]: ``s_dot -
+    x'``, times the normal's lever ``L_n`` [m] for a rocking arm (eq. 8)."""
+    theta, _, sd, _, _ = cam(t, p)
+    if p[LEVER] == 0.0:
+        return sd - y[1]
+    return profiles.evaluate(p, int(p[LEVER]), theta)[0] * (sd - y[1])
 
 
 @numba.njit(cache=True)
@@ -245,7 +290,7 @@ def transition(k, t, y, mode, p):
     """The mode after guard ``k`` crossed at ``t`` [s], and the reset of the state."""
     if p[LAW] != RIGID:   # a penalty law: contact onset (with its approach velocity) or end
         mode[0] = 1.0 - mode[0]
-        mode[1] = cam(t, p)[2] - y[1] if mode[0] > 0.5 else 0.0
+        mode[1] = approach_velocity(t, y, p) if mode[0] > 0.5 else 0.0
         return
     _, s, sd, sdd, _ = cam(t, p)
     if k == 1:   # the contact force fell to zero: separation, from the cam's state
@@ -279,11 +324,15 @@ def initial_mode(t, y, p, mode):
 
 
 def pack(profile, mass, stiffness, preload, speed, damping=0.0, phase=0.0, gravity=0.0, law=RIGID,
-         restitution=0.0, capture=0.0, contact_stiffness=0.0, contact_damping=0.0, hertz_law=None):
+         restitution=0.0, capture=0.0, contact_stiffness=0.0, contact_damping=0.0, hertz_law=None, lever=None,
+         curvature=None):
     """The parameter vector ``p`` (slots above, units there) with the profile's table.
 
     ``hertz_law`` is a dict of the Hertz law's slots (``CONTACT_KIND``, ``MODULUS``,
-    ``WIDTH``, ``FOLLOWER_RADIUS``, ``DAMPING_LAW``, ``V_REFERENCE``: slot -> value), for law 2."""
+    ``WIDTH``, ``FOLLOWER_RADIUS``, ``DAMPING_LAW``, ``V_REFERENCE``: slot -> value), for law 2.
+    ``lever`` and ``curvature`` are a rocking arm's tables of ``L_n`` [m] and ``kappa_cam``
+    [1/m] over the cam angle (in the profile table's format), appended after the profile's
+    with their starts in the slots ``LEVER`` and ``CURVATURE``."""
     head = np.zeros(PROFILE)
     head[[MASS, STIFFNESS, PRELOAD, DAMPING, SPEED, PHASE, GRAVITY, LAW, RESTITUTION, CAPTURE,
           CONTACT_STIFFNESS, CONTACT_DAMPING]] = (mass, stiffness, preload, damping, speed, phase, gravity, law,
@@ -292,7 +341,12 @@ def pack(profile, mass, stiffness, preload, speed, damping=0.0, phase=0.0, gravi
                                                          profile.offset, profile.roller_radius)
     for slot, value in (hertz_law or {}).items():
         head[slot] = value
-    return np.concatenate([head, profile.table])
+    parts = [head, profile.table]
+    for slot, table in ((LEVER, lever), (CURVATURE, curvature)):
+        if table is not None:
+            head[slot] = sum(part.size for part in parts)
+            parts.append(np.asarray(table, dtype=float))
+    return np.concatenate(parts)
 
 
 def penalty_damping(restitution, contact_stiffness, mass):

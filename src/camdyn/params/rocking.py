@@ -69,7 +69,7 @@ SCHEMA: dict[str, tuple[str, object, str]] = {
     "contact.restitution": ("", 0.8, "Newton's coefficient of restitution e of the normal velocity"),
     "contact.capture_velocity": ("1/s", 1e-6, "impacts slower than this [rad/s] end in sustained contact"),
     "contact.law": ("str", "rigid", "'rigid' (Newton restitution), 'compliant' (torsional spring-dashpot) or "
-                                    "'hertz' (line contact of a cylindrical roller)"),
+                                    "'hertz' (Hertz line or point contact, the exact lever at every angle)"),
     "contact.stiffness": ("N*m", 0.0, "torsional contact stiffness k_c [N m/rad] (compliant)"),
     "contact.damping": ("N*m*s", 0.0, "torsional contact damping c_c [N m s/rad] (compliant); under the hertz "
                                       "law the viscous law's c [N s/m]"),
@@ -77,14 +77,16 @@ SCHEMA: dict[str, tuple[str, object, str]] = {
     "contact.cam_poisson": ("", 0.3, "Poisson's ratio of the cam nu_c (hertz)"),
     "contact.follower_modulus": ("Pa", 210e9, "Young's modulus of the roller Y_f (hertz)"),
     "contact.follower_poisson": ("", 0.3, "Poisson's ratio of the roller nu_f (hertz)"),
-    "contact.geometry": ("str", "line", "'line' only: the rocking roller's Hertz contact (hertz)"),
+    "contact.geometry": ("str", "", "'line' (a cylindrical roller) or 'point' (a crowned roller, a knife edge's "
+                                    "rounded tip) (hertz); default point for a knife edge, line for a roller"),
     "contact.width": ("m", 0.0, "contact length l of line contact: the cam's or roller's width (hertz)"),
+    "contact.tip_radius": ("m", 0.0, "tip radius of a knife edge, point contact (hertz)"),
     "contact.damping_law": ("str", "none", "damping law (hertz): " + ", ".join(HERTZ_DAMPING_LAWS)),
     "contact.reference_velocity": ("m/s", 1e-3, "smallest approach velocity of the restitution laws (hertz)"),
 }
 #: Contact laws of the arm.
 CONTACT_LAWS = ("rigid", "compliant", "hertz")
-#: The Hertz keys of this schema (the translating schema's, less the knife edge's tip radius).
+#: The Hertz keys of this schema (the translating schema's).
 _HERTZ = tuple(key for key in HERTZ_KEYS if key in SCHEMA)
 #: Keys passed to the translating follower's reader as they are.
 _PASSED = ("profile.", "motion.")
@@ -227,7 +229,7 @@ def _check_contact(flat: dict, v: dict) -> None:
                               f"{', '.join(own[law])})")
     if law == "compliant" and v["contact.stiffness"] <= 0.0:
         raise ParameterError("contact.stiffness: a compliant contact needs a positive stiffness [N m/rad]")
-    for key in ("contact.stiffness", "contact.damping", "contact.width"):
+    for key in ("contact.stiffness", "contact.damping", "contact.width", "contact.tip_radius"):
         if v[key] < 0.0:
             raise ParameterError(f"{key} must not be negative, got {v[key]!r}")
     if not 0.0 <= v["contact.restitution"] <= 1.0:

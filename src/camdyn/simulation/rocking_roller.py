@@ -36,26 +36,36 @@ derivatives (see the documentation's section on the rocking roller).
 **Compliant contact.** Instead of Newton's law the cam may push the arm through a
 penalty: the compliant law, a torsional spring-dashpot on the angular penetration
 ``delta = s - x`` [rad] (the moment ``M = k_c delta + c_c delta'`` [N m], eq. (1) of the
-translating model's compliant law in angles), or Hertz line contact of a cylindrical
-roller of width ``l`` (K. L. Johnson, *Contact Mechanics*, 1985, section 4.3). The
-roller's penetration along the contact normal is, to first order in ``delta``,
-``delta_n = L_n delta`` with the normal's lever ``L_n = L cos(phi)`` about the pivot (the
-lever the contact force's moment has), so the Hertz line force ``N = (pi/4) E* l
-delta_n`` gives the moment ``N L_n = (pi/4) E* l L_n^2 delta``. The translating model's
-Hertz law takes one constant lever: the revolution's root mean square ``L_e =
-sqrt(<L_n^2>)`` over the table's samples, so the arm's angular Hertz stiffness is
-``(pi/4) E* l L_e^2`` [N m/rad]; the relative spread ``max |L_n^2 / L_e^2 - 1|`` of the
-lever over the revolution is the error of this stiffness at the worst angle (reported
-with each run as ``lever_spread``). The restitution damping laws scale with the ratio
-``delta' / v_approach``, the same in angles; a viscous ``c`` [N s/m] becomes ``c L_e^2``
-[N m s/rad] and the reference velocity ``v / L_e`` [rad/s]. A knife edge (point contact
-through its tip radius) takes the compliant law only: the Hertz point law's equivalent
-radius would come from the lift table's curvature, which is not the cam's.
+translating model's compliant law in angles), or Hertz contact (K. L. Johnson, *Contact
+Mechanics*, 1985, sections 4.2-4.3) at its exact lever at every cam angle. To first order
+in ``delta`` the penetration along the contact normal is
+
+    delta_n = L_n(theta) delta,    L_n = L cos(phi)                                 (A3)
+
+[m], with the normal's lever ``L_n`` [m] about the pivot (the rate at which the roller
+centre moves along the normal per radian of the arm, and the lever the contact force's
+moment has), its rate ``delta_n' = L_n delta' + omega L_n' delta`` [m/s] and the approach
+velocity ``v_n = L_n (s_dot - x')`` [m/s] at the onset. The normal force ``N(delta_n,
+delta_n')`` [N] is the translating follower's Hertz law: line contact of a cylindrical
+roller of width ``l``, ``(pi/4) E* l delta_n``, or point contact of a crowned roller (its
+radius ``r_r``) or a knife edge's rounded tip (radius ``r_f``), ``(4/3) E* sqrt(rho_e)
+delta_n^1.5`` with ``1/rho_e = kappa_cam + 1/r_f`` and ``kappa_cam`` [1/m] the curvature
+of the cam's surface at the contact (eq. K5 of :mod:`camdyn.model.rocking_roller`); its
+damping law acts on ``delta_n'`` and ``v_n``, so a viscous ``c`` is in N s/m and the
+reference velocity in m/s, on the roller. The arm feels the moment
+
+    M = L_n(theta) N                                                                (A4)
+
+[N m]. ``L_n`` and ``kappa_cam`` are sampled with ``psi_c`` and read by the compiled law
+from their own tables (eqs. 8-9 of :mod:`camdyn.model.translating_follower`). The first
+order neglects terms of relative size ``delta_n / rho`` (the normal penetration against
+the radii of curvature of the pitch curve and the roller centre's circle, and the lever's
+change while the bodies overlap): 2e-6 at 2 um of steel contact on the tests' rig. A knife edge's kinematics stay those
+of a sharp edge (its tip radius enters the stiffness only), as for a translating knife edge.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -67,18 +77,18 @@ from scipy.interpolate import CubicSpline
 from camdyn.errors import ParameterError
 from camdyn.model import lift_laws
 from camdyn.model.profiles import ROW, TWO_PI, Profile
-from camdyn.model.rocking_roller import RockingGeometry, contact_configuration
+from camdyn.model.rocking_roller import RockingGeometry, contact_configuration, surface_curvature
 from camdyn.params.rocking import RockingSpec
 from camdyn.simulation import limits
 from camdyn.simulation.translating import TranslatingFollower, follower_from_spec, simulate_translating
 from camdyn.simulation.translating_contact import HertzContact
 
 __all__ = ["RockingFollower", "RockingTable", "rocking_table", "simulate_rocking", "rocking_liftoff_speed",
-           "rocking_from_spec", "contact_lever", "CONTACT_LAWS"]
+           "rocking_from_spec", "CONTACT_LAWS"]
 
 #: Samples of the contact angle over one revolution in the lift table.
 SAMPLES = 8192
-#: Contact laws of the arm: Newton's restitution, a torsional spring-dashpot, Hertz line contact.
+#: Contact laws of the arm: Newton's restitution, a torsional spring-dashpot, Hertz line or point contact.
 CONTACT_LAWS = ("rigid", "compliant", "hertz")
 
 
@@ -105,14 +115,16 @@ class RockingFollower:
         contact.
     contact : str
         ``"rigid"`` (Newton's restitution), ``"compliant"`` (torsional spring-dashpot
-        ``contact_stiffness``, ``contact_damping``) or ``"hertz"`` (line contact of a
-        cylindrical roller, ``hertz``).
+        ``contact_stiffness``, ``contact_damping``) or ``"hertz"`` (``hertz``: line contact
+        of a cylindrical roller, point contact of a crowned roller or a knife edge's
+        rounded tip).
     contact_stiffness : float
         k_c [N m/rad] of the compliant law.
     contact_damping : float
         c_c [N m s/rad] of the compliant law.
     hertz : HertzContact or None
-        Materials, width and damping law of Hertz line contact (a roller only).
+        Materials, geometry (``"line"`` with its ``width``, or ``"point"``: the roller's
+        radius, or a knife edge's ``tip_radius``) and damping law of Hertz contact.
     samples : int
         Cam angles of the lift table (at least 256).
     citation : str
@@ -166,15 +178,17 @@ class RockingFollower:
             return
         if not isinstance(self.hertz, HertzContact):
             raise ParameterError("the Hertz contact needs its materials and width (hertz=HertzContact(...))")
-        if self.geometry.roller_radius <= 0.0:
-            raise ParameterError("a rocking knife edge takes the compliant contact only: its Hertz point contact "
-                                 "would need the cam's curvature, not the lift table's")
-        if self.hertz.geometry == "point":
-            raise ParameterError("contact.geometry: the rocking roller takes Hertz line contact only (a "
-                                 "cylindrical roller); use 'line' with contact.width")
-        if self.hertz.tip_radius != 0.0:
+        face = "roller" if self.geometry.roller_radius > 0.0 else "knife"
+        geometry = self.hertz.geometry_of(face)
+        if face == "knife" and geometry == "line":
+            raise ParameterError("contact.geometry: a knife edge with a rounded tip makes point contact; use "
+                                 "'point' with contact.tip_radius")
+        if face == "knife" and self.hertz.tip_radius <= 0.0:
+            raise ParameterError("contact.tip_radius: a sharp knife edge has no Hertz stiffness; give the edge's "
+                                 "tip radius [m] (point contact)")
+        if face == "roller" and self.hertz.tip_radius != 0.0:
             raise ParameterError("contact.tip_radius is for a knife edge only, not a roller")
-        if self.hertz.width <= 0.0:
+        if geometry == "line" and self.hertz.width <= 0.0:
             raise ParameterError("contact.width: line contact needs the positive width l [m] of the contact")
 
 
@@ -213,7 +227,8 @@ class RockingTable:
     ----------
     profile : Profile
         The lift ``s = sigma (psi_c - psi_0)`` [rad] as a cubic-spline table (its
-        ``base_radius`` and ``follower`` are the cam's, for the record only).
+        ``base_radius`` is the cam's, for the record only; its ``follower`` and
+        ``roller_radius`` the arm's: ``"roller"`` or ``"knife"``).
     rest_angle : float
         psi_0 [rad]: the arm angle on the cam's lowest point (least ``sigma psi_c``).
     theta : ndarray
@@ -222,6 +237,12 @@ class RockingTable:
         The exact ``s`` [rad] and its derivatives in theta at the samples.
     pressure_angle : ndarray
         The exact pressure angle [rad] at the samples.
+    lever : Profile
+        The normal's lever ``L_n = L cos(phi)`` [m] about the pivot (eq. A3), a periodic
+        cubic spline through its exact samples.
+    curvature : Profile
+        The cam surface's curvature ``kappa_cam`` [1/m] at the contact (eq. K5), linear
+        between its exact samples (no overshoot where it jumps at a joint of the profile).
     """
 
     profile: Profile
@@ -229,6 +250,8 @@ class RockingTable:
     theta: np.ndarray
     lift: np.ndarray
     pressure_angle: np.ndarray
+    lever: Profile
+    curvature: Profile
 
 
 def _rest_angle(geometry, theta, psi):
@@ -249,6 +272,27 @@ def _rest_angle(geometry, theta, psi):
     return value if sigma * value <= sigma * psi[0, best] else float(psi[0, best])
 
 
+def _table(theta, values, cubic=True):
+    """A profile table [the values' unit] through ``values`` at the equally spaced cam
+    angles ``theta`` [rad] over one revolution: a periodic cubic spline (SciPy's
+    ``CubicSpline``), or straight lines between the samples (``cubic=False``)."""
+    samples = theta.size
+    angles = np.r_[theta, TWO_PI]
+    table = np.zeros(1 + ROW * samples)
+    table[0] = samples
+    rows = table[1:].reshape(samples, ROW)
+    rows[:, 0] = lift_laws.CUBIC
+    rows[:, 1] = theta
+    rows[:, 2] = angles[1] - angles[0]
+    if cubic:
+        spline = CubicSpline(angles, np.r_[values, values[0]], bc_type="periodic")
+        rows[:, 3:7] = spline.c[::-1].T       # c0 + c1 t + c2 t^2 + c3 t^3
+    else:
+        rows[:, 3] = values
+        rows[:, 4] = np.diff(np.r_[values, values[0]]) / rows[:, 2]
+    return table
+
+
 @lru_cache(maxsize=8)
 def rocking_table(geometry, samples=SAMPLES):
     """The :class:`RockingTable` of a geometry with ``samples`` cam angles (cached)."""
@@ -258,53 +302,27 @@ def rocking_table(geometry, samples=SAMPLES):
     sigma = geometry.lift_direction
     lift = sigma * config.psi.copy()
     lift[0] -= sigma * rest
-    angles = np.r_[theta, TWO_PI]
-    spline = CubicSpline(angles, np.r_[lift[0], lift[0, 0]], bc_type="periodic")
-    table = np.zeros(1 + ROW * samples)
-    table[0] = samples
-    rows = table[1:].reshape(samples, ROW)
-    rows[:, 0] = lift_laws.CUBIC
-    rows[:, 1] = theta
-    rows[:, 2] = angles[1] - angles[0]
-    rows[:, 3:7] = spline.c[::-1].T       # c0 + c1 t + c2 t^2 + c3 t^3
     cam = geometry.profile
-    profile = Profile(table, cam.base_radius, cam.follower, cam.roller_radius, cam.offset)
-    return RockingTable(profile, rest, theta, lift, config.pressure_angle)
+    face = "roller" if geometry.roller_radius > 0.0 else "knife"
+
+    def profile(table):
+        return Profile(table, cam.base_radius, face, geometry.roller_radius, 0.0)
+
+    lever = geometry.arm_length * np.cos(config.pressure_angle)                     # (A3)
+    curvature = surface_curvature(geometry, config.parameter)                       # (K5)
+    return RockingTable(profile(_table(theta, lift[0])), rest, theta, lift, config.pressure_angle,
+                        profile(_table(theta, lever)), profile(_table(theta, curvature, cubic=False)))
 
 
-def contact_lever(follower):
-    """The constant lever of the arm's Hertz law and its spread over a revolution.
-
-    Returns
-    -------
-    lever : float
-        ``L_e = sqrt(<L_n^2>)`` [m], the root mean square over the table's cam angles of
-        the contact normal's lever ``L_n = L cos(phi)`` about the pivot.
-    spread : float
-        ``max |L_n^2 / L_e^2 - 1|`` [-]: the largest relative error of the angular
-        stiffness ``K L_e^2`` against the exact ``K L_n^2``.
-    """
-    table = rocking_table(follower.geometry, follower.samples)
-    squares = (follower.geometry.arm_length * np.cos(table.pressure_angle)) ** 2
-    mean = float(np.mean(squares))
-    return math.sqrt(mean), float(np.max(np.abs(squares / mean - 1.0)))
-
-
-def _angular_law(follower):
-    """Keyword arguments of the translating follower's contact law in the arm's angles."""
+def _angular_law(follower, table):
+    """Keyword arguments of the translating follower's contact law in the arm's angles:
+    the Hertz law with the arm's lever and curvature tables (eqs. A3-A4)."""
     if follower.contact == "rigid":
         return {}
     if follower.contact == "compliant":
         return {"contact": "compliant", "contact_stiffness": follower.contact_stiffness,
                 "contact_damping": follower.contact_damping}
-    lever, _ = contact_lever(follower)
-    law = follower.hertz
-    # the line coefficient (pi/4) E* l times L_e^2 is the angular stiffness [N m/rad]:
-    # the width slot carries l L_e^2 [m^3] (module docstring)
-    angular = dataclasses.replace(law, geometry="line", width=law.width * lever ** 2,
-                                  damping=law.damping * lever ** 2,
-                                  reference_velocity=law.reference_velocity / lever)
-    return {"contact": "hertz", "hertz": angular}
+    return {"contact": "hertz", "hertz": follower.hertz, "lever": table.lever, "curvature": table.curvature}
 
 
 def rocking_liftoff_speed(follower):
@@ -362,8 +380,8 @@ def simulate_rocking(follower, speed, duration, sample_rate=10e3, phase=0.0, ini
         translating follower's: under a compliant or Hertz law ``contact onset`` and
         ``contact end``), ``event_velocity`` [rad/s] and ``event_normal_velocity``
         [m/s] (relative, before the event). Attributes hold the parameters, the rest
-        angle, the contact law (and, Hertz, ``contact_lever_m`` and ``lever_spread`` of
-        :func:`contact_lever`) and the solver counters.
+        angle, the contact law (and, Hertz, its materials, geometry and damping) and the
+        solver counters.
     """
     if not isinstance(follower, RockingFollower):
         raise ParameterError(f"expected a RockingFollower, got {type(follower).__name__}")
@@ -381,7 +399,7 @@ def simulate_rocking(follower, speed, duration, sample_rate=10e3, phase=0.0, ini
                                       preload=follower.preload, damping=follower.damping,
                                       restitution=follower.restitution,
                                       capture_velocity=follower.capture_velocity, citation=follower.citation,
-                                      **_angular_law(follower))
+                                      **_angular_law(follower, table))
     state = None
     if initial_state is not None:
         y0 = np.asarray(initial_state, dtype=float).reshape(-1)
@@ -446,9 +464,12 @@ def _dataset(follower, table, ds, speed, phase):
         out.attrs.update({"contact_stiffness_N_m_per_rad": follower.contact_stiffness,
                           "contact_damping_N_m_s_per_rad": follower.contact_damping})
     elif follower.contact == "hertz":
-        lever, spread = contact_lever(follower)
         law = follower.hertz
-        out.attrs.update({"contact_lever_m": lever, "lever_spread": spread, "effective_modulus_Pa": law.modulus,
-                          "contact_width_m": law.width, "damping_law": law.damping_law,
-                          "contact_restitution": law.restitution})
+        shape = law.geometry_of(table.profile.follower)
+        out.attrs.update({"effective_modulus_Pa": law.modulus, "contact_geometry": shape,
+                          "contact_width_m": law.width if shape == "line" else 0.0,
+                          "contact_follower_radius_m": law.follower_radius(table.profile) if shape == "point" else 0.0,
+                          "damping_law": law.damping_law, "contact_damping_N_s_per_m": law.damping,
+                          "contact_restitution": law.restitution,
+                          "contact_reference_velocity_m_per_s": law.reference_velocity})
     return out

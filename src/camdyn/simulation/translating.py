@@ -68,6 +68,15 @@ class TranslatingFollower:
         kc [N/m] and cc [N s/m] of the compliant law.
     hertz : HertzContact or None
         Materials, geometry and damping of the Hertz law (required by ``"hertz"``).
+    lever : Profile or None
+        For a rocking arm run on this model (:mod:`camdyn.simulation.rocking_roller`), the
+        lever ``L_n`` [m] of the contact normal about the pivot over the cam angle, in a
+        profile's table: the Hertz law then works on the normal penetration ``L_n delta``
+        and gives the moment ``L_n N`` (eqs. 8-9 of
+        :mod:`camdyn.model.translating_follower`). Hertz contact only.
+    curvature : Profile or None
+        With ``lever``, the curvature ``kappa_cam`` [1/m] of the cam's surface at the
+        contact over the cam angle: required by point contact.
     citation : str
         Where the numbers come from.
     """
@@ -84,9 +93,12 @@ class TranslatingFollower:
     contact_stiffness: float = 0.0
     contact_damping: float = 0.0
     hertz: HertzContact | None = None
+    lever: Profile | None = None
+    curvature: Profile | None = None
     citation: str = field(default="", compare=False)
 
     def __post_init__(self):
+        self._check_lever()
         if not isinstance(self.profile, Profile):
             raise ParameterError(f"profile must be a camdyn Profile, got {type(self.profile).__name__}")
         if self.contact not in CONTACT_LAWS:
@@ -107,7 +119,23 @@ class TranslatingFollower:
         if self.contact == "hertz":
             if not isinstance(self.hertz, HertzContact):
                 raise ParameterError("the Hertz contact needs its materials and geometry (hertz=HertzContact(...))")
-            self.hertz.check(self.profile)
+            if self.lever is not None and self.hertz.geometry_of(self.profile.follower) == "point" and (
+                    self.curvature is None):
+                raise ParameterError("the arm's Hertz point contact needs the cam's curvature at its contact "
+                                     "(curvature=...)")
+            self.hertz.check(self.profile, self.curvature)
+
+    def _check_lever(self):
+        """Refuse lever and curvature tables that are not tables, or where no Hertz law
+        reads them."""
+        for name in ("lever", "curvature"):
+            table = getattr(self, name)
+            if table is not None and not isinstance(table, Profile):
+                raise ParameterError(f"{name} must be a table in a camdyn Profile, got {type(table).__name__}")
+        if self.curvature is not None and self.lever is None:
+            raise ParameterError("the curvature table belongs with a lever table (a rocking arm)")
+        if self.lever is not None and self.contact != "hertz":
+            raise ParameterError(f"the lever table is read by the Hertz law only, not the {self.contact} one")
 
     def pack(self, speed, phase=0.0):
         """The parameter vector of the compiled model at ``speed`` [rad/s], cam angle
@@ -119,7 +147,9 @@ class TranslatingFollower:
                            hertz_law=self.hertz.slots(self.profile))
         return model.pack(self.profile, self.mass, self.stiffness, self.preload, speed, damping=self.damping,
                           phase=phase, gravity=self.gravity, law=CONTACT_LAWS[self.contact],
-                          capture=self.capture_velocity, **contact)
+                          capture=self.capture_velocity, **contact,
+                          lever=None if self.lever is None else self.lever.table,
+                          curvature=None if self.curvature is None else self.curvature.table)
 
 
 #: The circular-arc cam of the Siconos cam-follower example (the cam law of its

@@ -121,11 +121,14 @@ class HertzContact:
         """``r_f`` [m] of point contact: the knife edge's tip or the roller's radius."""
         return self.tip_radius if profile.follower == "knife" else profile.roller_radius
 
-    def check(self, profile) -> None:
+    def check(self, profile, curvature=None) -> None:
         """Refuse, before any work, a geometry the follower's face does not allow: point
         contact of a flat face, line contact of a knife edge, a sharp knife edge, a missing
         width, a tip radius on a face without a tip, and point contact where the follower
-        does not fit the cam's concave surface (``1/rho_e <= 0``: GeometryError)."""
+        does not fit the cam's concave surface (``1/rho_e <= 0``: GeometryError). A
+        rocking arm gives the cam's curvature at its contact [1/m] as a table
+        (``curvature``, a :class:`~camdyn.model.profiles.Profile`) in place of the
+        profile's own."""
         face = profile.follower
         geometry = self.geometry_of(face)
         if face == "flat" and geometry == "point":
@@ -143,7 +146,7 @@ class HertzContact:
                                  "edge's tip radius [m] (point contact)")
         if geometry == "point":
             theta = np.linspace(0.0, 2.0 * math.pi, _CHECK_ANGLES, endpoint=False)
-            p = self._vector(profile)
+            p = self._vector(profile, curvature)
             inverse = np.array([model.equivalent_curvature(a, p) for a in theta])
             if not np.all(inverse > 0.0):
                 worst = int(np.argmin(inverse))
@@ -151,9 +154,12 @@ class HertzContact:
                                     f"concave surface at {math.degrees(theta[worst]):.3f} deg: no Hertz point "
                                     "contact there; use a smaller tip radius or roller")
 
-    def _vector(self, profile) -> np.ndarray:
-        """A parameter vector holding the profile and this law (its other slots unused)."""
-        return model.pack(profile, 1.0, 0.0, 0.0, 1.0, law=model.HERTZ, hertz_law=self.slots(profile))
+    def _vector(self, profile, curvature=None) -> np.ndarray:
+        """A parameter vector holding the profile, this law and a rocking arm's curvature
+        table (its other slots unused)."""
+        table = None if curvature is None else curvature.table
+        return model.pack(profile, 1.0, 0.0, 0.0, 1.0, law=model.HERTZ, hertz_law=self.slots(profile),
+                          curvature=table)
 
     def slots(self, profile) -> dict:
         """The model's Hertz slots (slot -> value) for a follower on ``profile``."""
