@@ -11,6 +11,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import xarray as xr
 
 from camdyn.errors import ParameterError
@@ -33,6 +34,9 @@ class Mechanism:
         The configuration, in SI units.
     system : System
         The cam-follower (follower 1 of two).
+    second : System or None
+        Follower 2 (two followers): follower 1's system with the ``[second.system]``
+        changes.
     drive : CamDrive or None
         The cam shaft (driven cam, two followers).
     pivot_damping : float or None
@@ -43,18 +47,20 @@ class Mechanism:
     spec: MechanismSpec
     system: System
     drive: CamDrive | None = None
+    second: System | None = None
     pivot_damping: float | None = None
 
 
-def _system(spec: MechanismSpec) -> System:
-    """The cam-follower: ``spec.system`` with the ``[system]`` changes, or built from them."""
+def _system(spec: MechanismSpec, changes: dict) -> System:
+    """The cam-follower: ``spec.system`` with the ``[system]`` changes and ``changes``,
+    or built from them."""
     if spec.system is None:
-        keys = dict(spec.system_keys)
+        keys = {**spec.system_keys, **changes}
         name = str(keys.pop("preset.name", spec.name))
         citation = str(keys.pop("preset.citation", ""))
         keys.pop("preset.description", None)
         return build_system(keys, name=name, citation=citation)
-    return load_system(spec.system, {key: value for key, value in spec.system_keys.items()
+    return load_system(spec.system, {key: value for key, value in {**spec.system_keys, **changes}.items()
                                      if not key.startswith("preset.")})
 
 
@@ -75,7 +81,10 @@ def load_mechanism(source: str | Path, overrides: dict | None = None) -> Mechani
     """
     spec = read_mechanism(source, overrides)
     try:
-        system = _system(spec)
+        system = _system(spec, {})
+        second = _system(spec, spec.second_keys) if spec.kind == "two-followers" else None
+        if second is not None and not spec.second_keys:
+            second = system
         drive = None if spec.drive is None else CamDrive(**spec.drive)
     except ParameterError as exc:
         raise type(exc)(f"{Path(str(source)).name}: {exc}") from None
@@ -84,7 +93,7 @@ def load_mechanism(source: str | Path, overrides: dict | None = None) -> Mechani
         # the damping of a ratio zeta of the follower's mass on the bearing (a critically damped
         # oscillator of mass m and stiffness kp has c = 2 sqrt(kp m))
         damping = 2.0 * spec.pivot_damping_ratio * math.sqrt(spec.pivot_stiffness * system.follower.mass)
-    return Mechanism(spec, system, drive, damping)
+    return Mechanism(spec, system, drive, second, damping)
 
 
 def simulate_mechanism(mechanism: Mechanism, revolutions: float = 5.0, sample_rate: float = 20e3,
@@ -122,7 +131,7 @@ def simulate_mechanism(mechanism: Mechanism, revolutions: float = 5.0, sample_ra
         ds = simulate_flexible_pivot(mechanism.system, spec.pivot_stiffness, mechanism.pivot_damping, **run)
     else:
         from camdyn.simulation.two_followers import simulate_two_followers
-        ds = simulate_two_followers(mechanism.system, mechanism.drive, placement=spec.placement,
+        ds = simulate_two_followers(mechanism.system, mechanism.drive, mechanism.second, placement=spec.placement,
                                     initial_speed=spec.initial_speed, static_friction=spec.static_friction, **run)
     ds.attrs.update(mechanism=spec.kind, name=spec.name)
     return ds
@@ -161,7 +170,12 @@ def mechanism_to_toml(mechanism: Mechanism) -> str:
     if spec.kind == "two-followers":
         lines += ["", "[second]", f"placement = {_quoted(spec.placement, 'rad')}"]
         if spec.static_friction is not None:
-            lines.append(f"static_friction = [{', '.join(repr(mu) for mu in spec.static_friction)}]")
+            values = np.atleast_1d(spec.static_friction).tolist()
+            lines.append(f"static_friction = [{', '.join(repr(mu) for mu in values)}]")
+        if mechanism.second != mechanism.system:
+            # follower 2 whole, as changes to follower 1 (every key, so the changes are all of it)
+            second = system_to_toml(mechanism.second).split("\n[", 1)[1]
+            lines += ["", "[second.system." + second.replace("\n[", "\n[second.system.")]
     system = system_to_toml(mechanism.system).replace("\n[", "\n[system.")
     if system.startswith("["):
         system = "[system." + system[1:]

@@ -17,6 +17,9 @@ a ``[mechanism]`` table naming the kind and the cam-follower it is built on::
     [second]                          # the second follower (two-followers)
     placement = "180 deg"
 
+    [second.system.spring]            # follower 2's changes to follower 1's system
+    stiffness = "3200 N/m"
+
     [pivot]                           # the bearing of the follower's pivot (flexible-pivot)
     stiffness = "2e7 N/m"
     damping_ratio = 0.05
@@ -128,6 +131,9 @@ class MechanismSpec:
     system_keys : dict
         The ``[system]`` table's dotted keys (``"cam.runout"``) and raw values, applied to
         ``system`` (or building it).
+    second_keys : dict
+        The ``[second.system]`` table's dotted keys and raw values: follower 2 is
+        follower 1's system with these changes too (two followers).
     drive : dict or None
         Keyword arguments of :class:`camdyn.simulation.mechanisms.CamDrive` [SI units];
         None for the flexible pivot.
@@ -141,14 +147,16 @@ class MechanismSpec:
         Bearing damping ratio [-].
     placement : float
         Follower 2's placement [rad] (two followers).
-    static_friction : tuple or None
-        One or two static friction coefficients [-] (two followers).
+    static_friction : float, (float, float) or None
+        The static friction coefficient of both followers, or one each [-] (two
+        followers).
     """
 
     name: str
     kind: str
     system: str | None
     system_keys: dict = field(default_factory=dict)
+    second_keys: dict = field(default_factory=dict)
     citation: str = ""
     description: str = ""
     drive: dict | None = None
@@ -157,13 +165,18 @@ class MechanismSpec:
     pivot_damping: float | None = None
     pivot_damping_ratio: float | None = None
     placement: float = math.pi
-    static_friction: tuple | None = None
+    static_friction: float | tuple | None = None
 
 
 def angular_speed(raw, key: str) -> float:
     """An angular speed [rad/s] from text with its unit: ``"72.6 rad/s"`` as written,
     ``"11.55 Hz"`` and ``"693 rpm"`` as revolutions (``2 pi`` rad each)."""
-    if not isinstance(raw, str):
+    try:
+        float(raw)
+        bare = True
+    except (TypeError, ValueError):
+        bare = not isinstance(raw, str)
+    if bare:
         raise UnitError(f"{key}: {raw!r} has no unit; write it as text with one, e.g. \"{raw} rad/s\" or "
                         f"\"{raw} Hz\"")
     if "rad" in raw:
@@ -197,13 +210,13 @@ def _value(key: str, raw):
             raise ParameterError(f"{key} must be finite, got {raw!r}")
         if (spec.bound == "positive" and not value > 0.0) or (spec.bound == "non-negative" and value < 0.0):
             raise ParameterError(f"{key} must be {spec.bound}, got {raw!r}")
-    return tuple(numbers) if spec.unit == "list" else numbers[0]
+    return tuple(numbers) if len(numbers) == 2 else numbers[0]
 
 
 def _check_keys(flat: dict) -> str:
     """Refuse unknown keys and keys of another kind; return the mechanism kind."""
     for key in flat:
-        if key not in SCHEMA and not key.startswith("system."):
+        if key not in SCHEMA and not key.startswith(("system.", "second.system.")):
             close = difflib.get_close_matches(key, list(SCHEMA), n=3)
             hint = f"; did you mean {', '.join(close)}?" if close else f"; known keys: {', '.join(SCHEMA)}"
             raise UnknownKeyError(f"unknown key {key!r} in a mechanism configuration{hint}")
@@ -268,7 +281,9 @@ def mechanism_spec_from_table(flat: dict, name: str = "custom", folder: Path | N
         if out["pivot_damping"] is None and out["pivot_damping_ratio"] is None:
             raise ParameterError("missing key 'pivot.damping' (or 'pivot.damping_ratio'): the bearing's damping")
     if "second" in tables:
-        out.update(placement=_read(flat, "second.placement"), static_friction=_read(flat, "second.static_friction"))
+        out.update(placement=_read(flat, "second.placement"), static_friction=_read(flat, "second.static_friction"),
+                   second_keys={key[len("second.system."):]: value for key, value in flat.items()
+                                if key.startswith("second.system.")})
     return MechanismSpec(**out)
 
 
