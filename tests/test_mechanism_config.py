@@ -172,6 +172,16 @@ def test_overrides_and_unit_of_speeds():
         load_mechanism(EXAMPLES / "driven_cam.toml", {"drive.free_speed": "90"})
 
 
+def test_stick_slip_file_is_the_python_example():
+    # examples/two_followers.py: the drum brake under a PI controller, mu_s = 0.4, from 2 rad/s
+    mechanism = load_mechanism(EXAMPLES / "drum_brake_stick_slip.toml")
+    rig = drum_brake()
+    drive = CamDrive(shaft_inertia=2e-4, kind="controller", proportional=0.01, integral=0.5, target_speed=2.0)
+    assert (mechanism.system, mechanism.second, mechanism.drive) == (rig.system, rig.second, drive)
+    assert (mechanism.spec.initial_speed, mechanism.spec.static_friction, mechanism.spec.placement) == (
+        2.0, 0.4, rig.placement)
+
+
 @pytest.mark.parametrize("name, assignments", [
     ("drum_brake", ()), ("flexible_pivot", ()), ("driven_cam", ()),
     ("drum_brake", ("second.system.spring.stiffness=3200 N/m", "second.static_friction=0.35",
