@@ -107,7 +107,7 @@ def test_summary_table_names_units(tmp_path):
 
 BASE = """
 [mechanism]
-kind = "{kind}"
+kind = {kind}
 system = "sundar2014-friction"
 [system.environment]
 gravity = "0 m/s^2"
@@ -123,6 +123,7 @@ torque = "0.1 N*m"
     ("two-followers", DRIVE + "torgue = \"1 N*m\"\n", "drive.torgue"),
     ("two-followers", DRIVE.replace("2e-4", "-2e-4"), "drive.shaft_inertia"),
     ("three-followers", DRIVE, "mechanism.kind"),
+    ("[1, 2]", DRIVE, "mechanism.kind"),
     ("driven-cam", DRIVE + "[second]\nplacement = \"90 deg\"\n", "second.placement"),
     ("two-followers", DRIVE + "[pivot]\nstiffness = \"1e7 N/m\"\n", "pivot.stiffness"),
     ("flexible-pivot", "[pivot]\nstiffness = \"1e7 N/m\"\n" + DRIVE, "drive.shaft_inertia"),
@@ -140,7 +141,7 @@ torque = "0.1 N*m"
 ])
 def test_bad_keys_are_refused_by_name(tmp_path, kind, extra, key):
     path = tmp_path / "bad.toml"
-    path.write_text(BASE.format(kind=kind) + extra)
+    path.write_text(BASE.format(kind=kind if kind.startswith("[") else f'"{kind}"') + extra)
     nc = tmp_path / "never.nc"
     status, out, err = run("simulate", path, "--out", nc)
     assert status == 2, (out, err)

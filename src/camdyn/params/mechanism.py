@@ -221,7 +221,7 @@ def _check_keys(flat: dict) -> str:
             hint = f"; did you mean {', '.join(close)}?" if close else f"; known keys: {', '.join(SCHEMA)}"
             raise UnknownKeyError(f"unknown key {key!r} in a mechanism configuration{hint}")
     kind = flat.get("mechanism.kind")
-    if kind not in KINDS:
+    if not isinstance(kind, str) or kind not in KINDS:
         raise ParameterError(f"mechanism.kind must be one of {', '.join(KINDS)}, got {kind!r}")
     tables = KINDS[kind]
     for key in flat:
@@ -231,7 +231,7 @@ def _check_keys(flat: dict) -> str:
                                   f"{', '.join(f'[{t}]' for t in tables)} besides [mechanism] and [system]")
     if "drive" in tables:
         drive_kind = flat.get("drive.kind", SCHEMA["drive.kind"].default)
-        if drive_kind not in DRIVE_KINDS:
+        if not isinstance(drive_kind, str) or drive_kind not in DRIVE_KINDS:
             raise ParameterError(f"drive.kind must be one of {', '.join(DRIVE_KINDS)}, got {drive_kind!r}")
         own = _SHAFT_KEYS + DRIVE_KINDS[drive_kind]
         for key in flat:
