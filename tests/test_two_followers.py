@@ -15,6 +15,7 @@ from camdyn.model import two_followers as pair
 from camdyn.simulation.mechanisms import DRIVEN_STATE, CamDrive, simulate_driven_cam
 from camdyn.simulation.runner import prepare
 from camdyn.simulation.two_followers import drum_brake, pack_two_followers, simulate_two_followers
+from camdyn.systems import registry
 from camdyn.testing.oracle import ReferenceModel
 
 
@@ -54,7 +55,7 @@ def test_two_opposite_identical_followers_each_match_the_single_follower(frictio
     for row in range(0, one.time.size, 7):
         y = np.array([one[name].values[row] for name, *_ in DRIVEN_STATE])
         mode = np.empty(L.MODE_SIZE)
-        driven_cam.initial_mode(0.0, y, p_one, mode)
+        registry.initial_mode(registry.DRIVEN_CAM, 0.0, y, p_one, mode)
         single = driven_cam.accelerations(y, mode, p_one)[4]
         y2 = np.r_[y[:2], y[:2], y[2:5], y[5:6], 0.0, y[7], y[7]]
         modes = np.empty(pair.MODE_SIZE)

@@ -18,6 +18,7 @@ from camdyn.params.config import (
     preset_text,
     system_to_toml,
 )
+from camdyn.params.mechanism import is_mechanism
 from camdyn.params.profiles import declared_kind, is_translating, list_translating_presets, translating_preset_text
 from camdyn.params.units import parse_quantity, parse_speed
 
@@ -38,7 +39,12 @@ def presets_list(ctx: typer.Context):
 
 
 def presets_show(name: str):
-    """Print a preset as TOML (copy it to start your own configuration)."""
+    """Print a preset as TOML (copy it to start your own configuration); a mechanism's
+    file is printed whole, its system included, every key in SI units."""
+    if is_mechanism(name):
+        from camdyn.cli.mechanism import show_mechanism
+        typer.echo(show_mechanism(name))
+        return
     if name in list_translating_presets():
         typer.echo(translating_preset_text(name))
         return
@@ -160,9 +166,15 @@ def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
 
     A configuration whose [follower] says kind = "translating" (or the preset alzate) is a
     translating follower on a cam profile, kind = "rocking" a rocking roller or knife edge
-    on one (docs/profiles.md)."""
+    on one (docs/profiles.md). A file with a [mechanism] table is a mechanism: the cam
+    on a driven shaft, the follower on a flexible pivot, or two followers on one cam
+    (docs/mechanisms.md)."""
     from camdyn.simulation.runner import simulate as run
     check_outputs(netcdf=out, figure=plot, force=force)
+    if is_mechanism(source):
+        from camdyn.cli.mechanism import simulate_mechanism_command
+        simulate_mechanism_command(source, set_, speed, revolutions, sample_rate, out, plot, method, rtol, json_out)
+        return
     if is_translating(source):
         from camdyn.cli.translating import simulate_translating_command
         simulate_translating_command(source, set_, speed, revolutions, sample_rate, out, plot, method, rtol, json_out)

@@ -47,7 +47,7 @@ import numba
 import numpy as np
 
 from camdyn.model import layout as L
-from camdyn.model.dynamics import evaluate_cam, mode_expected_sign, mode_initial, mode_transition
+from camdyn.model.dynamics import evaluate_cam
 from camdyn.model.geometry import contact_kinematics_trig, contact_rates_trig
 
 SHAFT_INERTIA = L.SIZE + 0     # J [kg m^2]
@@ -70,8 +70,7 @@ CONTROLLED_SIZE = 5
 GUARD_COUNT = 3
 
 __all__ = ["drive_torque", "bearing_torque", "contact_torque", "contact_torque_parts", "channels", "CHANNELS",
-           "accelerations", "rhs", "jacobian", "guards",
-           "expected_sign", "transition", "initial_mode", "SIZE", "STATE_SIZE", "DRIVE_KINDS"]
+           "accelerations", "rhs", "jacobian", "guards", "monitor", "SIZE", "STATE_SIZE", "DRIVE_KINDS"]
 
 
 @numba.njit(cache=True)
@@ -195,28 +194,8 @@ def guards(t, y, f, known, p, values, rates):
     rates[2] = delta_ddot
 
 
-# The contact modes are the cam-follower's (camdyn.model.dynamics: mode_*).
-@numba.njit(cache=True)
-def expected_sign(k, mode, p):
-    """+1 or -1 for an active guard, 0 for an inactive one (the cam-follower's rule)."""
-    return mode_expected_sign(k, mode, p)
-
-
-@numba.njit(cache=True)
-def transition(k, values, mode):
-    """The mode after guard ``k`` crossed (the cam-follower's rule)."""
-    mode_transition(k, values, mode)
-
-
-@numba.njit(cache=True)
-def initial_mode(t, y, p, mode):
-    """The mode at the start: in contact where the penetration is positive."""
-    values = np.empty(GUARD_COUNT)
-    rates = np.empty(GUARD_COUNT)
-    guards(t, y, y, False, p, values, rates)
-    mode_initial(values, p, mode)
-
-
+# The contact modes, their guards' expected signs, transitions and the initial mode are the
+# cam-follower's (camdyn.model.dynamics: mode_*), applied by camdyn.systems.mechanisms.
 @numba.njit(cache=True)
 def monitor(t, y, mode, p):
     """Normal force [N] during an impact (its peak goes to the event log), else 0."""

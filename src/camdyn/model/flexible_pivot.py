@@ -78,13 +78,7 @@ import numpy as np
 
 from camdyn.model import layout as L
 from camdyn.model.contact import contact_force
-from camdyn.model.dynamics import (
-    mode_expected_sign,
-    mode_initial,
-    mode_transition,
-    spring_force_trig,
-    spring_moment_trig,
-)
+from camdyn.model.dynamics import spring_force_trig, spring_moment_trig
 from camdyn.model.friction import friction_coefficient
 from camdyn.model.geometry import cam_acceleration, cam_angle, contact_kinematics_from, contact_rates_from
 
@@ -96,9 +90,8 @@ STATE_SIZE = 8
 CONTROLLED_SIZE = 6
 GUARD_COUNT = 3
 
-__all__ = ["spring_force_slope", "evaluate", "rhs", "jacobian", "guards", "expected_sign", "transition",
-           "initial_mode", "monitor", "channels", "CHANNELS", "SIZE", "STATE_SIZE", "PIVOT_STIFFNESS",
-           "PIVOT_DAMPING"]
+__all__ = ["spring_force_slope", "evaluate", "rhs", "jacobian", "guards", "monitor", "channels", "CHANNELS",
+           "SIZE", "STATE_SIZE", "PIVOT_STIFFNESS", "PIVOT_DAMPING"]
 
 
 @numba.njit(cache=True)
@@ -247,28 +240,8 @@ def guards(t, y, f, known, p, values, rates):
     rates[2] = delta_ddot + 2.0 * alpha_dot * u_vel + n_acc
 
 
-# The contact modes are the cam-follower's (camdyn.model.dynamics: mode_*).
-@numba.njit(cache=True)
-def expected_sign(k, mode, p):
-    """+1 or -1 for an active guard, 0 for an inactive one (the cam-follower's rule)."""
-    return mode_expected_sign(k, mode, p)
-
-
-@numba.njit(cache=True)
-def transition(k, values, mode):
-    """The mode after guard ``k`` crossed (the cam-follower's rule)."""
-    mode_transition(k, values, mode)
-
-
-@numba.njit(cache=True)
-def initial_mode(t, y, p, mode):
-    """The mode at the start: in contact where the penetration is positive."""
-    values = np.empty(GUARD_COUNT)
-    rates = np.empty(GUARD_COUNT)
-    guards(t, y, y, False, p, values, rates)
-    mode_initial(values, p, mode)
-
-
+# The contact modes, their guards' expected signs, transitions and the initial mode are the
+# cam-follower's (camdyn.model.dynamics: mode_*), applied by camdyn.systems.mechanisms.
 @numba.njit(cache=True)
 def monitor(t, y, mode, p):
     """Normal force [N] during an impact (its peak goes to the event log), else 0."""

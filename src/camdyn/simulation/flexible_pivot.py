@@ -120,7 +120,7 @@ def flexible_pivot_equilibrium(system: System, pivot_stiffness: float, pivot_dam
     weights = np.array([system.follower.inertia - m * system.follower.cg_distance ** 2, m, m])
     mode = np.zeros(L.MODE_SIZE)
     start = np.array([prep.equilibrium.angle, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
-    pivot.initial_mode(0.0, start, p, mode)
+    systems.initial_mode(systems.FLEXIBLE_PIVOT, 0.0, start, p, mode)
     # the start: the rigid pivot's equilibrium, the bearing deflected by its reaction
     # (unknowns alpha [rad] and the bearing's spring force kp (u, v) [N])
     res = dynamics.evaluate(0.0, prep.equilibrium.angle, 0.0, mode, prep.p)
@@ -158,7 +158,7 @@ def natural_frequencies(system: System, pivot_stiffness: float) -> np.ndarray:
     """
     p, y0, prep = flexible_pivot_equilibrium(system, pivot_stiffness, 0.0)
     mode = np.zeros(L.MODE_SIZE)
-    pivot.initial_mode(0.0, y0, p, mode)
+    systems.initial_mode(systems.FLEXIBLE_PIVOT, 0.0, y0, p, mode)
     theta0, speed = float(p[L.THETA0]), float(p[L.OMEGA])
     x0 = y0[[0, 2, 4]]
     steps = np.array([1e-7, 1e-10, 1e-10])

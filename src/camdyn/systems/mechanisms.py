@@ -15,8 +15,9 @@ guards); id 8 is reserved.
 from __future__ import annotations
 
 import numba
+import numpy as np
 
-from camdyn.model import driven_cam, stick_slip
+from camdyn.model import driven_cam, dynamics, stick_slip
 from camdyn.model import flexible_pivot as pivot
 from camdyn.model import layout as L
 from camdyn.model import two_followers as pair
@@ -80,9 +81,8 @@ def expected_sign(system, k, mode, p):
         return stick_slip.expected_sign(k, mode, p)
     if system == TWO_FOLLOWERS:
         return pair.expected_sign(k, mode, p)
-    if system == FLEXIBLE_PIVOT:
-        return pivot.expected_sign(k, mode, p)
-    return driven_cam.expected_sign(k, mode, p)
+    # the driven cam and the flexible pivot: the cam-follower's contact modes and rule
+    return dynamics.mode_expected_sign(k, mode, p)
 
 
 @numba.njit(cache=True)
@@ -91,10 +91,8 @@ def transition(system, k, t, y, values, mode, p):
         stick_slip.transition(k, t, y, mode, p)
     elif system == TWO_FOLLOWERS:
         pair.transition(k, t, y, values, mode, p)
-    elif system == FLEXIBLE_PIVOT:
-        pivot.transition(k, values, mode)
-    else:
-        driven_cam.transition(k, values, mode)
+    else:   # the driven cam and the flexible pivot: the cam-follower's rule
+        dynamics.mode_transition(k, values, mode)
 
 
 @numba.njit(cache=True)
@@ -103,10 +101,12 @@ def initial_mode(system, t, y, p, mode):
         stick_slip.initial_mode(t, y, p, mode)
     elif system == TWO_FOLLOWERS:
         pair.initial_mode(t, y, p, mode)
-    elif system == FLEXIBLE_PIVOT:
-        pivot.initial_mode(t, y, p, mode)
-    else:
-        driven_cam.initial_mode(t, y, p, mode)
+    else:   # the driven cam and the flexible pivot: in contact where the penetration is positive
+        count = sizes(system)[2]
+        values = np.empty(count)
+        rates = np.empty(count)
+        guards(system, t, y, y, False, p, values, rates)
+        dynamics.mode_initial(values, p, mode)
 
 
 @numba.njit(cache=True)
