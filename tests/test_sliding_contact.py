@@ -52,7 +52,7 @@ def test_roller_spin_up_on_a_dwell_ends_at_the_closed_form_time():
     """A roller set down without spin on a base circle (constant normal force N = F0):
     J_r omega_r' = -r_r mu_k N until the slip u = omega r_base + r_r omega_r vanishes, at
     t* = J_r omega r_base / (mu_k N r_r^2); then it rolls at -omega r_base / r_r."""
-    r_base, r_r, inertia, mu, preload, omega = 0.05, 0.01, 2e-5, 0.2, 50.0, 100.0
+    r_base, r_r, inertia, mu, preload, omega = 0.05, 0.01, 2e-6, 0.2, 50.0, 100.0
     profile = eccentric_circle(r_base, 0.0, follower="roller", roller_radius=r_r)
     follower = TranslatingFollower(profile, mass=0.5, stiffness=1000.0, preload=preload)
     ds = simulate_sliding(follower, FollowerFriction(0.3, mu, roller_inertia=inertia), omega, 0.02,
@@ -64,7 +64,7 @@ def test_roller_spin_up_on_a_dwell_ends_at_the_closed_form_time():
     sliding = ds["time"].values < t_stop
     np.testing.assert_allclose(ds["roller_speed"].values[sliding], -mu * preload * r_r / inertia
                                * ds["time"].values[sliding], rtol=1e-10, atol=1e-9)
-    assert np.all(ds["roller_speed"].values[~sliding] == -omega * r_base / r_r)
+    np.testing.assert_allclose(ds["roller_speed"].values[~sliding], -omega * r_base / r_r, rtol=1e-14)
     np.testing.assert_allclose(ds["contact_force"].values, preload, rtol=1e-12)
     # the heat of friction: mu N times the slip, which falls linearly to zero; it equals
     # the spin's kinetic energy gained (the energy balance of a slipping clutch)
@@ -96,7 +96,8 @@ def test_knife_edge_normal_force_against_the_classical_relation():
     np.testing.assert_allclose(ds["contact_force"].values, expected, rtol=1e-12)
     np.testing.assert_allclose(ds["friction_force"].values, -mu * expected, rtol=1e-12)
     np.testing.assert_allclose(ds["line_force"].values, line, rtol=1e-12)
-    assert float(ds["contact_force"].max()) > float(ds["line_force"].max())
+    rise = s1 > eps   # phi > 0: the tip dragged back, the cam pushes harder than the line needs
+    assert rise.any() and np.all(ds["contact_force"].values[rise] > ds["line_force"].values[rise])
 
 
 def test_flat_face_friction_loads_only_the_guide():
@@ -257,11 +258,11 @@ def _spin_at(cam, pieces, times):
 
 
 def test_roller_lift_off_skid_and_roll_against_an_independent_solution():
-    """One revolution from the bottom of an eccentric circle at 1337 rpm: the roller rolls,
+    """One revolution from the bottom of an eccentric circle at 120 rad/s: the roller rolls,
     the cone breaks as the normal force falls, it slides, lifts off, lands (a plastic
     landing: every touch is a capture) without spin change, skids and rolls again; every
     event time and the roller's spin against the solution above (SciPy, rtol 1e-12)."""
-    R, e, r, m, k, f0, J, mu_s, mu_k, omega = 0.05, 0.01, 0.012, 0.5, 2000.0, 20.0, 2.5e-6, 0.15, 0.1, 140.0
+    R, e, r, m, k, f0, J, mu_s, mu_k, omega = 0.05, 0.01, 0.012, 0.5, 2000.0, 20.0, 2.5e-6, 0.15, 0.1, 120.0
     profile = eccentric_circle(R, e, follower="roller", roller_radius=r)
     follower = TranslatingFollower(profile, mass=m, stiffness=k, preload=f0, capture_velocity=100.0)
     period = 2 * math.pi / omega
@@ -271,7 +272,7 @@ def test_roller_lift_off_skid_and_roll_against_an_independent_solution():
     events, pieces = _oracle(cam, period, float(ds["roller_speed"][0]))
     kinds = [kind for _, kind in events]
     assert kinds == list(ds["event_kind"].values)
-    assert {"slip", "separation", "capture", "rolling"} <= set(kinds)
+    assert kinds == ["slip", "separation", "capture", "rolling"]
     np.testing.assert_allclose(ds["event_time"].values, [t for t, _ in events], rtol=0, atol=1e-9)
     spin = _spin_at(cam, pieces, ds["time"].values)
     scale = float(np.abs(spin).max())
@@ -320,5 +321,6 @@ def test_configuration_reads_the_friction_table():
     example = Path(__file__).resolve().parents[1] / "examples" / "profiles" / "roller_friction.toml"
     follower, spec = load_translating(example, {})
     friction = friction_from_spec(spec)
-    assert friction == FollowerFriction(0.15, 0.1, 2.5e-6)
+    assert (friction.static, friction.kinetic) == (0.15, 0.1)
+    assert friction.roller_inertia == pytest.approx(2.5e-6, rel=1e-15)
     assert follower.profile.follower == "roller" and follower.profile.roller_radius == 0.012

@@ -73,6 +73,9 @@ SLIP = 2          # mode slot: sign of the slip velocity, 0 rolling
 FRICTION_SLOTS = 3
 FLAT_FACE = 0.0
 KNIFE_FACE = 1.0
+#: A slip [m/s] below this fraction of ``omega Rp`` at the start of a contact is rolling's
+#: rounding (a spin set to rolling's from the geometry).
+ROLLING_SLIP = 1e-13
 #: Time step [s] of the central differences of the rolling guards' rates, per radian of cam.
 RATE_STEP = 1e-6
 
@@ -159,8 +162,8 @@ def rhs(t, y, mode, p, dydt):
         return
     normal, friction, spin_rate = forces(t, mode[SLIP], p)
     dydt[2] = spin_rate
-    if mode[SLIP] != 0.0:
-        dydt[3] = abs(friction) * abs(slip_velocity(t, y[2], p))
+    if mode[SLIP] != 0.0:   # |F| |u|, written sign(u) u so that it stays smooth up to the event
+        dydt[3] = abs(friction) * mode[SLIP] * slip_velocity(t, y[2], p)
 
 
 @numba.njit(cache=True)
@@ -170,8 +173,7 @@ def jacobian(t, y, mode, p, jac):
     tf.jacobian(t, y, mode, p, jac)   # zeroes the whole matrix first
     if in_contact(mode, p) and mode[SLIP] != 0.0 and p[tf.FACE] == tf.ROLLER_FACE:
         friction = forces(t, mode[SLIP], p)[1]
-        u = slip_velocity(t, y[2], p)
-        jac[3, 2] = abs(friction) * p[tf.ROLLER_RADIUS] * (1.0 if u >= 0.0 else -1.0)
+        jac[3, 2] = abs(friction) * p[tf.ROLLER_RADIUS] * mode[SLIP]
 
 
 @numba.njit(cache=True)
@@ -233,13 +235,13 @@ def hold_or_slip(t, y, mode, p):
 @numba.njit(cache=True)
 def settle(t, y, mode, p):
     """The slip mode at the start of sustained contact at ``t`` [s]: the sign of ``u``
-    (a roller without inertia spins up at once and rolls), or at ``u = 0``
-    :func:`hold_or_slip`."""
+    (a roller without inertia spins up at once and rolls), or at ``u = 0`` (to
+    :data:`ROLLING_SLIP`) :func:`hold_or_slip`."""
     if not rolls(p):
         mode[SLIP] = 1.0
         return
     u = slip_velocity(t, y[2], p)
-    if u == 0.0 or coefficients(p)[2] == 0.0:
+    if abs(u) <= ROLLING_SLIP * p[tf.SPEED] * p[tf.PRIME_RADIUS] or coefficients(p)[2] == 0.0:
         hold_or_slip(t, y, mode, p)
         return
     mode[SLIP] = 1.0 if u > 0.0 else -1.0
