@@ -279,6 +279,13 @@ def test_roller_lift_off_skid_and_roll_against_an_independent_solution():
     spin = _spin_at(cam, pieces, ds["time"].values)
     scale = float(np.abs(spin).max())
     assert float(np.abs(ds["roller_speed"].values - spin).max()) < 1e-10 * scale
+    # the cam can neither pull (N >= 0, |F| <= mu N and cos phi > mu |sin phi| give F_line
+    # >= 0) nor change the motion of a follower it holds: the lift motion is the
+    # frictionless one (measured 1e-17 m), the friction only sets N, F and the spin
+    plain = simulate_translating(follower, omega, period, sample_rate=20000.0, phase=math.pi, rtol=1e-12,
+                                 atol=1e-14)
+    assert float(np.abs(ds["x"].values - plain["x"].values).max()) < 1e-12
+    np.testing.assert_allclose(ds["event_time"].values[1:3], plain["event_time"].values, rtol=0, atol=1e-12)
 
 
 # --- refusals ------------------------------------------------------------------------------
