@@ -65,6 +65,18 @@ def run_span(name: str, default_speed: float | None, speed: str | None, revoluti
     return omega, revolutions * 2.0 * math.pi / omega, parse_quantity(sample_rate, "Hz", "--sample-rate")
 
 
+def friction_summary(ds) -> dict:
+    """The friction's headline numbers of a run with friction at the cam contact."""
+    kinds = ds["event_kind"].values
+    return {"friction": {"static": float(ds.attrs["static_friction"]), "kinetic": float(ds.attrs["kinetic_friction"]),
+                         "friction_force_max_N": float(np.abs(ds["friction_force"]).max()),
+                         "slip_velocity_max_m_per_s": float(np.abs(ds["slip_velocity"]).max()),
+                         "friction_heat_J": float(ds["friction_heat"][-1]),
+                         "rolling_fraction": float(ds["rolling"].mean()),
+                         "rolling_starts": int(np.count_nonzero(kinds == "rolling")),
+                         "slips": int(np.count_nonzero(kinds == "slip"))}}
+
+
 def add_run_rows(table: Table, out: dict) -> None:
     """The summary table's last rows, shared by the profile followers: time in contact,
     lift-off speed and the solver's counts."""
@@ -86,6 +98,14 @@ def _print(out: dict) -> None:
     table.add_row("captures into sustained contact", f"{out['captures']}")
     table.add_row("max contact force", f"{out['contact_force_max_N']:.5g} N")
     table.add_row("max gap (flight height)", f"{out['gap_max_m'] * 1e3:.4g} mm")
+    if "friction" in out:
+        f = out["friction"]
+        table.add_row("friction mu_s / mu_k", f"{f['static']:.4g} / {f['kinetic']:.4g}")
+        table.add_row("max friction force", f"{f['friction_force_max_N']:.5g} N")
+        table.add_row("max slip velocity", f"{f['slip_velocity_max_m_per_s']:.4g} m/s")
+        table.add_row("heat of friction", f"{f['friction_heat_J']:.5g} J")
+        table.add_row("roller rolling", f"{100 * f['rolling_fraction']:.1f} % of the time ({f['rolling_starts']} "
+                                        f"starts, {f['slips']} slips)")
     add_run_rows(table, out)
     console.print(table)
 
@@ -95,6 +115,7 @@ def simulate_translating_command(source: str, assignments, speed: str | None, re
                                  rtol: float | None, json_out: bool) -> None:
     """Run ``camdyn simulate`` on a translating follower (the outputs are checked already)."""
     from camdyn.io.lift_table import load_translating
+    from camdyn.simulation.sliding import friction_from_spec, simulate_sliding
     from camdyn.simulation.translating import simulate_translating
 
     if method != "auto":
@@ -102,10 +123,16 @@ def simulate_translating_command(source: str, assignments, speed: str | None, re
                              "method only (leave --method out)")
     follower, spec = load_translating(source, parse_assignments(assignments))
     omega, duration, fs = run_span(spec.name, spec.speed, speed, revolutions, sample_rate)
-    ds = simulate_translating(follower, omega, duration, sample_rate=fs, phase=spec.phase,
-                              rtol=DEFAULT_RTOL if rtol is None else rtol)
+    friction = friction_from_spec(spec)
+    tolerance = DEFAULT_RTOL if rtol is None else rtol
+    if friction is None:
+        ds = simulate_translating(follower, omega, duration, sample_rate=fs, phase=spec.phase, rtol=tolerance)
+    else:
+        ds = simulate_sliding(follower, friction, omega, duration, sample_rate=fs, phase=spec.phase, rtol=tolerance)
     ds.attrs["name"] = spec.name
     summary = translating_summary(ds, follower)
+    if friction is not None:
+        summary.update(friction_summary(ds))
     if not json_out:
         _print(summary)
     files = []

@@ -10,16 +10,13 @@ as text with its unit, as in the rocking follower's files (:mod:`camdyn.params.c
     mass = "1.221 kg"
 
     [spring]
-    stiffness = "1430.8 N/m"
-    preload = "143.08 N"
+    stiffness = "1430.8 N/m"   # and preload = "143.08 N"
 
     [profile]
     kind = "rise-return"
     base_radius = "40 mm"
-    segments = [{law = "cycloidal", span = "120 deg", lift = "10 mm"},
-                {law = "dwell", span = "60 deg"},
-                {law = "cycloidal", span = "120 deg", lift = "-10 mm"},
-                {law = "dwell", span = "60 deg"}]
+    segments = [{law = "cycloidal", span = "120 deg", lift = "10 mm"}, {law = "dwell", span = "60 deg"},
+                {law = "cycloidal", span = "120 deg", lift = "-10 mm"}, {law = "dwell", span = "60 deg"}]
 
     [motion]
     speed = "358 rpm"
@@ -44,12 +41,12 @@ from importlib import resources
 from pathlib import Path
 
 from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyError
+from camdyn.params.follower_friction import FRICTION_SCHEMA, check_friction
 from camdyn.params.units import parse_quantity, parse_speed, registry
 
 __all__ = ["SCHEMA", "SEGMENT_KEYS", "ARC_KEYS", "PROFILE_KINDS", "FACES", "CONTACT_LAWS", "HERTZ_DAMPING_LAWS",
-           "HERTZ_KEYS", "TranslatingSpec",
-           "read_translating", "spec_from_table", "is_translating", "declared_kind", "list_translating_presets",
-           "translating_preset_text"]
+           "HERTZ_KEYS", "TranslatingSpec", "read_translating", "spec_from_table", "is_translating", "declared_kind",
+           "list_translating_presets", "translating_preset_text"]
 
 #: The follower kind that selects this schema in ``[follower] kind``.
 TRANSLATING = "translating"
@@ -109,6 +106,7 @@ SCHEMA: dict[str, tuple[str, object, str]] = {
     "profile.file": ("str", _REQUIRED, "tabulated: CSV file of the lift, relative to the TOML file"),
     "motion.speed": ("speed", None, "cam speed omega (rpm, Hz = rev/s or rad/s)"),
     "motion.phase": ("angle", 0.0, "cam angle theta0 at t = 0"),
+    **FRICTION_SCHEMA,
 }
 #: Keys of one rise-return segment: law name, angular span, change of lift.
 SEGMENT_KEYS = {"law": ("str", _REQUIRED, "'dwell', 'cycloidal', 'harmonic', 'polynomial-345' or "
@@ -153,6 +151,8 @@ class TranslatingSpec:
         ``"line"``, ``"point"`` or ``""`` (the face's own); a :data:`HERTZ_DAMPING_LAWS` name.
     reference_velocity : float
         Smallest approach velocity of its restitution laws [m/s].
+    static_friction, kinetic_friction, roller_inertia : float
+        mu_s [-], mu_k [-] (None: mu_s) and J_r [kg m^2] of :mod:`camdyn.params.follower_friction`.
     profile_kind : str
         A key of :data:`PROFILE_KINDS`.
     base_radius : float
@@ -204,6 +204,9 @@ class TranslatingSpec:
     tip_radius: float = 0.0
     damping_law: str = "none"
     reference_velocity: float = 1e-3
+    static_friction: float = 0.0
+    kinetic_friction: float | None = None
+    roller_inertia: float = 0.0
 
 
 def _unknown(key: str, known) -> UnknownKeyError:
@@ -290,10 +293,9 @@ def _check_ranges(values: dict) -> None:
             raise ParameterError(f"{key} must be positive, got {values[key]!r} {SCHEMA[key][0]}")
     if not 0.0 <= values["contact.restitution"] <= 1.0:
         raise ParameterError(f"contact.restitution must be between 0 and 1, got {values['contact.restitution']!r}")
-    if values["follower.face"] not in FACES:
-        raise ParameterError(f"follower.face must be one of {', '.join(FACES)}, got {values['follower.face']!r}")
-    if values["contact.law"] not in CONTACT_LAWS:
-        raise ParameterError(f"contact.law must be one of {', '.join(CONTACT_LAWS)}, got {values['contact.law']!r}")
+    for key, allowed in (("follower.face", FACES), ("contact.law", CONTACT_LAWS)):
+        if values[key] not in allowed:
+            raise ParameterError(f"{key} must be one of {', '.join(allowed)}, got {values[key]!r}")
     if values["contact.law"] == "compliant" and values["contact.stiffness"] <= 0.0:
         raise ParameterError("contact.stiffness: a compliant contact needs a positive penalty stiffness [N/m]")
     if values["follower.face"] == "roller" and values["follower.roller_radius"] <= 0.0:
@@ -369,6 +371,7 @@ def spec_from_table(flat: dict, name: str = "custom", citation: str = "", folder
     v = _converted(flat)
     _check_ranges(v)
     _check_hertz(flat, v)
+    check_friction(v)
     kind = v["profile.kind"]
     extra = {}
     if kind == "rise-return":
@@ -390,7 +393,8 @@ def spec_from_table(flat: dict, name: str = "custom", citation: str = "", folder
         contact=v["contact.law"], restitution=v["contact.restitution"],
         capture_velocity=v["contact.capture_velocity"], contact_stiffness=v["contact.stiffness"],
         contact_damping=v["contact.damping"], profile_kind=kind, base_radius=base, speed=v["speed"],
-        phase=v["motion.phase"], **{key.split(".")[1]: v[key] for key in HERTZ_KEYS}, **extra)
+        phase=v["motion.phase"], static_friction=v["friction.static"], kinetic_friction=v["friction.kinetic"],
+        roller_inertia=v["friction.roller_inertia"], **{key.split(".")[1]: v[key] for key in HERTZ_KEYS}, **extra)
 
 
 def _flatten(table: dict, prefix: str = "") -> dict:
@@ -430,8 +434,7 @@ def _declares_translating(text: str) -> bool:
     return isinstance(follower, dict) and follower.get("kind") == TRANSLATING
 
 
-def _source_text(source: str | Path) -> tuple[str, str, Path | None]:
-    """(TOML text, name, folder of its relative paths) of a preset name or file."""
+def _source_text(source: str | Path) -> tuple[str, str, Path | None]:   # (text, name, folder of relative paths)
     if str(source) in list_translating_presets():
         return translating_preset_text(str(source)), str(source), None
     path = Path(str(source))
@@ -447,8 +450,7 @@ def _source_text(source: str | Path) -> tuple[str, str, Path | None]:
 
 
 def declared_kind(source: str | Path) -> str | None:
-    """The ``[follower] kind`` a TOML file declares (None without one, or for a file that
-    cannot be read as TOML: the rocking follower's reader reports that)."""
+    """The ``[follower] kind`` a TOML file declares (None without one, or where unreadable)."""
     path = Path(str(source))
     try:
         follower = tomllib.loads(path.read_text(encoding="utf-8")).get("follower", {}) if path.is_file() else {}

@@ -9,7 +9,9 @@ System 7 is the rocking follower on a flexible pivot bearing
 (:mod:`camdyn.model.flexible_pivot`, 8 states, the cam-follower's 3 guards and modes).
 System 9 is two rocking followers on one driven cam (:mod:`camdyn.model.two_followers`,
 11 states, per follower the cam-follower's 3 guards and mode, a stick flag and 2 stick
-guards); id 8 is reserved.
+guards); id 8 is reserved. System 10 is the translating follower with Coulomb friction
+at its cam contact (:mod:`camdyn.model.sliding_follower`, 4 states, 5 guards: a knife
+edge or flat face that slides, a roller that rolls or slides).
 """
 
 from __future__ import annotations
@@ -20,12 +22,14 @@ import numpy as np
 from camdyn.model import driven_cam, dynamics, stick_slip
 from camdyn.model import flexible_pivot as pivot
 from camdyn.model import layout as L
+from camdyn.model import sliding_follower as sliding
 from camdyn.model import two_followers as pair
 
 STICK_SLIP = 5
 DRIVEN_CAM = 6
 FLEXIBLE_PIVOT = 7
 TWO_FOLLOWERS = 9
+SLIDING_FOLLOWER = 10
 
 @numba.njit(cache=True)
 def sizes(system):
@@ -36,6 +40,8 @@ def sizes(system):
         return pivot.STATE_SIZE, pivot.CONTROLLED_SIZE, pivot.GUARD_COUNT, L.MODE_SIZE
     if system == TWO_FOLLOWERS:
         return pair.STATE_SIZE, pair.CONTROLLED_SIZE, pair.GUARD_COUNT, pair.MODE_SIZE
+    if system == SLIDING_FOLLOWER:
+        return sliding.STATE_SIZE, sliding.CONTROLLED_SIZE, sliding.GUARD_COUNT, sliding.MODE_SIZE
     return driven_cam.STATE_SIZE, driven_cam.CONTROLLED_SIZE, driven_cam.GUARD_COUNT, L.MODE_SIZE
 
 
@@ -45,6 +51,8 @@ def rhs(system, t, y, mode, p, dydt):
         stick_slip.rhs(t, y, mode, p, dydt)
     elif system == TWO_FOLLOWERS:
         pair.rhs(t, y, mode, p, dydt)
+    elif system == SLIDING_FOLLOWER:
+        sliding.rhs(t, y, mode, p, dydt)
     elif system == FLEXIBLE_PIVOT:
         pivot.rhs(t, y, mode, p, dydt)
     else:
@@ -57,6 +65,8 @@ def jacobian(system, t, y, f0, mode, p, jac):
         stick_slip.jacobian(t, y, mode, p, jac)
     elif system == TWO_FOLLOWERS:
         pair.jacobian(t, y, mode, p, jac)
+    elif system == SLIDING_FOLLOWER:
+        sliding.jacobian(t, y, mode, p, jac)
     elif system == FLEXIBLE_PIVOT:
         pivot.jacobian(t, y, mode, p, jac)
     else:
@@ -69,6 +79,8 @@ def guards(system, t, y, f, known, p, values, rates):
         stick_slip.guards(t, y, f, known, p, values, rates)
     elif system == TWO_FOLLOWERS:
         pair.guards(t, y, f, known, p, values, rates)
+    elif system == SLIDING_FOLLOWER:
+        sliding.guards(t, y, f, known, p, values, rates)
     elif system == FLEXIBLE_PIVOT:
         pivot.guards(t, y, f, known, p, values, rates)
     else:
@@ -81,6 +93,8 @@ def expected_sign(system, k, mode, p):
         return stick_slip.expected_sign(k, mode, p)
     if system == TWO_FOLLOWERS:
         return pair.expected_sign(k, mode, p)
+    if system == SLIDING_FOLLOWER:
+        return sliding.expected_sign(k, mode, p)
     # the driven cam and the flexible pivot: the cam-follower's contact modes and rule
     return dynamics.mode_expected_sign(k, mode, p)
 
@@ -91,6 +105,8 @@ def transition(system, k, t, y, values, mode, p):
         stick_slip.transition(k, t, y, mode, p)
     elif system == TWO_FOLLOWERS:
         pair.transition(k, t, y, values, mode, p)
+    elif system == SLIDING_FOLLOWER:
+        sliding.transition(k, t, y, mode, p)
     else:   # the driven cam and the flexible pivot: the cam-follower's rule
         dynamics.mode_transition(k, values, mode)
 
@@ -101,6 +117,8 @@ def initial_mode(system, t, y, p, mode):
         stick_slip.initial_mode(t, y, p, mode)
     elif system == TWO_FOLLOWERS:
         pair.initial_mode(t, y, p, mode)
+    elif system == SLIDING_FOLLOWER:
+        sliding.initial_mode(t, y, p, mode)
     else:   # the driven cam and the flexible pivot: in contact where the penetration is positive
         count = sizes(system)[2]
         values = np.empty(count)
@@ -130,4 +148,6 @@ def monitor(system, t, y, mode, p):
         return pivot.monitor(t, y, mode, p)
     if system == TWO_FOLLOWERS:
         return pair.monitor(t, y, mode, p)
+    if system == SLIDING_FOLLOWER:
+        return sliding.monitor(t, y, mode, p)
     return driven_cam.monitor(t, y, mode, p)

@@ -33,7 +33,9 @@ the cam as a rigid body on a driven shaft (:mod:`camdyn.model.driven_cam`, 8 sta
 cam-follower's 3 guards and modes); system 7 the rocking follower on a flexible pivot
 bearing (:mod:`camdyn.model.flexible_pivot`, 8 states, the same guards and modes);
 system 9 two rocking followers on one driven cam (:mod:`camdyn.model.two_followers`,
-11 states, per follower the cam-follower's guards and mode with a stick phase).
+11 states, per follower the cam-follower's guards and mode with a stick phase); system 10
+the translating follower with friction at its cam contact
+(:mod:`camdyn.model.sliding_follower`, 4 states, 5 guards).
 
 A new model gets an id here (or, for a mechanism, in :mod:`camdyn.systems.mechanisms`)
 and a branch in each function; these two modules are the only ones that import the
@@ -62,6 +64,7 @@ STICK_SLIP = mechanisms.STICK_SLIP
 DRIVEN_CAM = mechanisms.DRIVEN_CAM
 FLEXIBLE_PIVOT = mechanisms.FLEXIBLE_PIVOT
 TWO_FOLLOWERS = mechanisms.TWO_FOLLOWERS
+SLIDING_FOLLOWER = mechanisms.SLIDING_FOLLOWER
 
 
 @numba.njit(cache=True)

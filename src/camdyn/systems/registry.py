@@ -23,6 +23,7 @@ from camdyn.systems.models import (
     FLEXIBLE_PIVOT,
     OSCILLATOR,
     RIGID_IMPACT,
+    SLIDING_FOLLOWER,
     STICK_SLIP,
     TRANSLATING_FOLLOWER,
     TWO_FOLLOWERS,
@@ -30,7 +31,7 @@ from camdyn.systems.models import (
 from camdyn.systems.variational import PARAMETRIC, VARIATIONAL
 
 __all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", "TRANSLATING_FOLLOWER", "STICK_SLIP",
-           "DRIVEN_CAM", "FLEXIBLE_PIVOT", "TWO_FOLLOWERS",
+           "DRIVEN_CAM", "FLEXIBLE_PIVOT", "TWO_FOLLOWERS", "SLIDING_FOLLOWER",
            "VARIATIONAL", "PARAMETRIC", "state_size", "controlled_size",
            "guard_count", "mode_size", "rhs", "rhs_inline", "jacobian", "guards",
            "expected_sign", "transition", "initial_mode", "regime", "preferred_method", "monitor"]
