@@ -96,15 +96,8 @@ def _central(system_id, p, y0, t0, t1, steps, rtol, atol):
     return np.array(columns).T
 
 
-CH4_OPEN = pytest.mark.xfail(strict=True, reason=(
-    "chapter 4 rig from rest (7 impacts per revolution, viscous law A): 3.5e-6 of the column's largest entry "
-    "against the differences, which are converged (Richardson from two step pairs, runs at rtol 1e-12 to 1e-13: "
-    "within 2e-7 of each other); the variational run is noise-limited (2.8e5 steps per revolution at rtol "
-    "1e-11, doubling per halving of rtol; the forward-difference Jacobian's rounding noise is the suspect)"))
-
-
 @pytest.mark.parametrize("preset, speed, events", [("sundar2014-impact", 16.0, 3),
-                                                   pytest.param("sundar2014-friction", 11.55, 1, marks=CH4_OPEN)])
+                                                   ("sundar2014-friction", 11.55, 1)])
 def test_cam_follower_matrix_matches_finite_differences_of_whole_simulations(preset, speed, events):
     system = camdyn.load_system(preset).with_values(**{"motion.speed": speed})
     prep = prepare(system)

@@ -114,6 +114,21 @@ def mode_size(system):
 
 
 @numba.njit(cache=True)
+def variational_jacobian(system, t, y, f0, mode, p, jac):
+    """The Jacobian for the variational system (:mod:`camdyn.systems.variational`), which
+    integrates ``Phi' = J Phi`` under error control: the cam-follower's by central
+    differences (:func:`camdyn.model.dynamics.central_jacobian`, whose noise is far below
+    the forward differences' that :func:`jacobian` keeps for the Rosenbrock steps); every
+    other model's is :func:`jacobian`."""
+    if system == CAM_FOLLOWER:
+        jac[:, :] = 0.0
+        jac[0, 1] = 1.0
+        dynamics.central_jacobian(t, y, f0, mode, p, jac)
+        return
+    jacobian(system, t, y, f0, mode, p, jac)
+
+
+@numba.njit(cache=True)
 def carried_slot(system, p):
     """The mode slot that holds a value of the state at the last event on which the
     right-hand side depends under the parameters ``p`` (the approach velocity [m/s] of

@@ -4,7 +4,8 @@ saltation matrix applied at every event.
 
 For a model of ``n`` states the variational system has ``n + n^2`` states: the model's
 ``y``, then ``Phi`` (row-major, ``Phi[i, j] = Y[n + i n + j]``) with ``Phi' = J(t, y) Phi``
-between events. At an event of guard ``g`` (before: mode ``-``; after: mode ``+``, with the
+between events (``J`` from :func:`camdyn.systems.models.variational_jacobian`). At an
+event of guard ``g`` (before: mode ``-``; after: mode ``+``, with the
 reset ``y+ = R(y-, t)``) the matrix jumps by the saltation matrix (Aizerman and Gantmacher
 1958; Leine and Nijmeijer 2004, doi:10.1007/978-3-540-44398-8)::
 
@@ -139,7 +140,7 @@ def rhs(model, count, t, y, mode, p, dydt):
     f = dydt[:n]
     models.rhs(model, t, x, mode, p, f)
     jac = np.empty((n, n))
-    models.jacobian(model, t, x, f, mode, p, jac)
+    models.variational_jacobian(model, t, x, f, mode, p, jac)
     for c in range(n + count):
         column = n + c * n if c >= n else n + c   # Phi's column c, or parameter c - n
         stride = 1 if c >= n else n
