@@ -138,3 +138,18 @@ def test_parameter_directions_refuse_bad_keys_and_directions():
     with pytest.raises(ParameterError, match="direction"):
         integrate_variational(systems.OSCILLATOR, np.ones(5), [1.0, 0.0, 0.0], 0.0, 1.0, directions=np.ones(4),
                               steps=[1e-7])
+
+
+def test_restitution_law_parameter_sensitivity_carries_the_approach_velocity():
+    """Under Hunt-Crossley the damping scales with 1 / v_approach, the penetration rate
+    at the impact's onset: the runout moves the penetration (the guard) and its rate, so
+    its derivative needs the approach velocity's own derivative at the onset."""
+    system = camdyn.load_system("sundar2014-impact").with_values(
+        **{"motion.speed": 16.0, "contact.damping": "hunt-crossley", "contact.restitution": 0.7})
+    prep = prepare(system)
+    period = 1.0 / 16.0
+    run = state_transition(system, rtol=1e-11, atol=1e-13, parameters=("cam.runout",))
+    assert run.events >= 3
+    expected = _simulation_differences(system, "cam.runout", prep.y0, period, 1e-5 * system.cam.runout)
+    scale = np.abs(expected[:2]).max()
+    np.testing.assert_allclose(run.parameters[:2, 0] / scale, expected[:2] / scale, rtol=0, atol=1e-6)

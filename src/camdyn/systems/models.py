@@ -49,7 +49,7 @@ import math
 import numba
 import numpy as np
 
-from camdyn.model import coupled_oscillator, dynamics, impact_oscillator
+from camdyn.model import contact, coupled_oscillator, dynamics, impact_oscillator
 from camdyn.model import layout as L
 from camdyn.model import translating_follower as translating
 from camdyn.systems import mechanisms
@@ -114,6 +114,43 @@ def mode_size(system):
     if system == TRANSLATING_FOLLOWER:
         return translating.MODE_SIZE
     return 1
+
+
+@numba.njit(cache=True)
+def variational_jacobian(system, t, y, f0, mode, p, jac):
+    """The Jacobian for the variational system (:mod:`camdyn.systems.variational`), which
+    integrates ``Phi' = J Phi`` under error control: the cam-follower's by central
+    differences (:func:`camdyn.model.dynamics.central_jacobian`, whose noise is far below
+    the forward differences' that :func:`jacobian` keeps for the Rosenbrock steps); every
+    other model's is :func:`jacobian`."""
+    if system == CAM_FOLLOWER:
+        jac[:, :] = 0.0
+        jac[0, 1] = 1.0
+        dynamics.central_jacobian(t, y, f0, mode, p, jac)
+        return
+    jacobian(system, t, y, f0, mode, p, jac)
+
+
+@numba.njit(cache=True)
+def carried_slot(system, p):
+    """The mode slot that holds a value of the state at the last event on which the
+    right-hand side depends under the parameters ``p`` (the approach velocity [m/s] of
+    the restitution-parameterised contact laws, set at contact onset), or -1 for none.
+    The variational system carries that value's derivatives
+    (:mod:`camdyn.systems.variational`). Two followers on one cam keep one such slot per
+    follower and are not covered (-1)."""
+    if system == CAM_FOLLOWER or system == DRIVEN_CAM or system == FLEXIBLE_PIVOT:
+        return L.MODE_APPROACH if p[L.DAMPING_LAW] >= contact.FIRST_RESTITUTION_CODE else -1
+    if system == TRANSLATING_FOLLOWER:
+        return 1 if p[translating.DAMPING_LAW] >= contact.FIRST_RESTITUTION_CODE else -1
+    return -1
+
+
+@numba.njit(cache=True)
+def carries(system):
+    """Whether the mode of ``system`` can hold a value carried from an event
+    (:func:`carried_slot` for some parameters)."""
+    return system == CAM_FOLLOWER or system == DRIVEN_CAM or system == FLEXIBLE_PIVOT or system == TRANSLATING_FOLLOWER
 
 
 # --- forced linear oscillator: y'' + 2 zeta w y' + w^2 y = A cos(W t); p = (w, zeta, A, W, stiff)

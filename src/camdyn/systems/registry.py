@@ -69,8 +69,12 @@ def guard_count(system):
 
 @numba.njit(cache=True)
 def mode_size(system):
-    """Number of slots of the mode vector."""
-    return models.mode_size(_model(system))
+    """Number of slots of the mode vector (a variational system's adds the derivatives
+    of a carried mode value: :func:`camdyn.systems.variational.mode_size`)."""
+    if system >= VARIATIONAL:
+        model, count = variational.split(system)
+        return variational.mode_size(model, count)
+    return models.mode_size(system)
 
 
 @numba.njit(cache=True)

@@ -4,7 +4,8 @@ saltation matrix applied at every event.
 
 For a model of ``n`` states the variational system has ``n + n^2`` states: the model's
 ``y``, then ``Phi`` (row-major, ``Phi[i, j] = Y[n + i n + j]``) with ``Phi' = J(t, y) Phi``
-between events. At an event of guard ``g`` (before: mode ``-``; after: mode ``+``, with the
+between events (``J`` from :func:`camdyn.systems.models.variational_jacobian`). At an
+event of guard ``g`` (before: mode ``-``; after: mode ``+``, with the
 reset ``y+ = R(y-, t)``) the matrix jumps by the saltation matrix (Aizerman and Gantmacher
 1958; Leine and Nijmeijer 2004, doi:10.1007/978-3-540-44398-8)::
 
@@ -31,9 +32,29 @@ A parameter is a direction in the parameter vector: its slots ``p[:L]`` move by
 difference over ``p[:L] + (-2, -1, 1, 2) h_j dp/dq_j``, ``dg/dq_j`` and ``dR/dq_j`` the
 second-order one over ``p[:L] +- h_j dp/dq_j`` (guards and resets are evaluated once per
 event, the field at every stage). The system id carries ``k``: :func:`system_id`. The derivatives
-are taken at a fixed initial state and with the model's mode vector held (a mode slot
-that stores a parameter-dependent value, such as an impact's approach velocity, is not
-differentiated).
+are taken at a fixed initial state.
+
+**A value carried in the mode.** Under the restitution-parameterised contact laws the
+force depends on the approach velocity ``c`` of the current contact, which the model's
+transition stores in the mode at contact onset from the state there
+(:func:`camdyn.systems.models.carried_slot`), so the flow depends on the state at onset
+through ``c`` as well. The variational system carries ``r = dc/d(column)`` for each
+column (``Phi``'s ``n``, then the ``k`` parameters') in mode slots after the model's
+(:func:`mode_size`), constant between events, and adds to each column's rate::
+
+    Phi_c' = J Phi_c + (df/dc) r_c                                               (3)
+
+with ``df/dc`` by a central difference of the right-hand side in ``c``. At an event the
+value after it, ``c+ = T(y-, t*, c-, q)`` (the transition, guard values recomputed from
+the state), has (differentiating it with the event time ``dt*``)::
+
+    r+ = T_y (Phi_c + f- dt*) + T_t dt* + T_c r- + T_q,
+    dt* = -(grad(g) Phi_c + dg/dq) / (dg/dt)-                                    (4)
+
+(``dg/dq`` and ``T_q`` only in a parameter's column), the partial derivatives of ``T``
+by central differences: at an onset ``T_c = 0`` and ``T_y`` is the gradient of the
+approach velocity, at any other event ``T_c = 1`` and the rest zero. Under the other
+laws the slots stay zero and nothing changes.
 
 Every component is error-controlled (the matrices too); the explicit steppers are used
 (:func:`preferred_method` returns DOP853).
@@ -73,6 +94,26 @@ def state_size(model, count):
 
 
 @numba.njit(cache=True)
+def mode_size(model, count):
+    """The model's mode slots, then, for a model with a carried mode value
+    (:func:`camdyn.systems.models.carried_slot`), that value's derivatives: ``n`` with
+    respect to the initial state, then one per parameter (eq. 3)."""
+    size = models.mode_size(model)
+    if models.carries(model):
+        size += models.state_size(model) + count
+    return size
+
+
+@numba.njit(cache=True)
+def _offset(n, c):
+    """``(first index, stride)`` in the variational state of column ``c``: ``Phi``'s
+    column ``c`` for ``c < n``, else parameter ``c - n``'s ``Y_j``."""
+    if c < n:
+        return n + c, n
+    return n + n * n + (c - n) * n, 1
+
+
+@numba.njit(cache=True)
 def _direction(p, count, j):
     """``(L, h_j, first slot of h_j dp/dq_j)`` of parameter ``j`` (see the module's
     docstring)."""
@@ -99,7 +140,7 @@ def rhs(model, count, t, y, mode, p, dydt):
     f = dydt[:n]
     models.rhs(model, t, x, mode, p, f)
     jac = np.empty((n, n))
-    models.jacobian(model, t, x, f, mode, p, jac)
+    models.variational_jacobian(model, t, x, f, mode, p, jac)
     for c in range(n + count):
         column = n + c * n if c >= n else n + c   # Phi's column c, or parameter c - n
         stride = 1 if c >= n else n
@@ -108,6 +149,7 @@ def rhs(model, count, t, y, mode, p, dydt):
             for k in range(n):
                 acc += jac[i, k] * y[column + k * stride]
             dydt[column + i * stride] = acc
+    _carried_field(model, count, t, x, mode, p, dydt)
     if count == 0:
         return
     # df/dq_j by the fourth-order central difference (f(-2h) - 8 f(-h) + 8 f(h) - f(2h)) / 12h:
@@ -124,6 +166,136 @@ def rhs(model, count, t, y, mode, p, dydt):
             models.rhs(model, t, x, mode, moved, values)
             for i in range(n):
                 dydt[base + i] += weights[r] * values[i] / (12.0 * step)
+
+
+@numba.njit(cache=True)
+def _carried_field(model, count, t, x, mode, p, dydt):
+    """Add ``(df/dc) (dc/d column)`` to the rate of every column (eq. 3): ``c`` the
+    carried mode value, ``df/dc`` by a central difference of the model's right-hand side
+    in it, ``dc/d column`` from the mode's derivative slots. Nothing while those are all
+    zero (no event has set the value yet)."""
+    slot = models.carried_slot(model, p)
+    if slot < 0:
+        return
+    n = x.shape[0]
+    first = models.mode_size(model)
+    active = False
+    for c in range(n + count):
+        active = active or mode[first + c] != 0.0
+    if not active:
+        return
+    value = mode[slot]
+    step = DIFFERENCE_STEP * max(abs(value), 1e-6)
+    moved = mode.copy()
+    up = np.empty(n)
+    down = np.empty(n)
+    moved[slot] = value + step
+    models.rhs(model, t, x, moved, p, up)
+    moved[slot] = value - step
+    models.rhs(model, t, x, moved, p, down)
+    span = (value + step) - (value - step)   # the step as represented
+    for c in range(n + count):
+        rate = mode[first + c]
+        if rate != 0.0:
+            column, stride = _offset(n, c)
+            for i in range(n):
+                dydt[column + i * stride] += (up[i] - down[i]) / span * rate
+
+
+@numba.njit(cache=True)
+def _carried_value(model, k, t, x, mode, p):
+    """The carried mode value after the transition of guard ``k`` at ``(t, x)`` from
+    ``mode`` (neither changed), with the guard values taken there as the driver takes
+    them."""
+    m = models.guard_count(model)
+    vals = np.empty(m)
+    rates = np.empty(m)
+    models.guards(model, t, x, x, False, p, vals, rates)
+    after = mode.copy()
+    models.transition(model, k, t, x.copy(), vals, after, p)
+    return after[models.carried_slot(model, p)]
+
+
+@numba.njit(cache=True)
+def _carried_partials(model, k, t, x, mode, p, partials):
+    """Central differences of :func:`_carried_value` in each state component into
+    ``partials[:n]``, in time into ``partials[n]`` and in the value before the event into
+    ``partials[n + 1]``."""
+    n = x.shape[0]
+    probe = x.copy()
+    moved = mode.copy()
+    slot = models.carried_slot(model, p)
+    for i in range(n + 2):
+        if i < n:
+            step = DIFFERENCE_STEP * max(abs(x[i]), 1.0)
+            probe[i] = x[i] + step
+            up = _carried_value(model, k, t, probe, mode, p)
+            span = probe[i]
+            probe[i] = x[i] - step
+            down = _carried_value(model, k, t, probe, mode, p)
+            span -= probe[i]
+            probe[i] = x[i]
+        elif i == n:
+            step = DIFFERENCE_STEP * max(abs(t), 1.0)
+            up = _carried_value(model, k, t + step, x, mode, p)
+            down = _carried_value(model, k, t - step, x, mode, p)
+            span = (t + step) - (t - step)
+        else:
+            value = mode[slot]
+            step = DIFFERENCE_STEP * max(abs(value), 1e-6)
+            moved[slot] = value + step
+            up = _carried_value(model, k, t, x, moved, p)
+            moved[slot] = value - step
+            down = _carried_value(model, k, t, x, moved, p)
+            span = (value + step) - (value - step)
+        partials[i] = (up - down) / span
+
+
+@numba.njit(cache=True)
+def _carried_jump(model, count, k, t, y, mode, p):
+    """The derivatives of the carried mode value across the event of guard ``k`` at ``t``
+    [s] (eq. 4), into the mode's derivative slots, from the state, its columns and the
+    mode before the event (``y``, ``mode``; the model's slots of ``mode`` unchanged)."""
+    if models.carried_slot(model, p) < 0:
+        return
+    n = models.state_size(model)
+    m = models.guard_count(model)
+    x = y[:n].copy()
+    first = models.mode_size(model)
+    f_before = np.empty(n)
+    models.rhs(model, t, x, mode, p, f_before)
+    vals = np.empty(m)
+    rates = np.empty(m)
+    models.guards(model, t, x, f_before, True, p, vals, rates)
+    rate = rates[k]                          # (dg/dt)-, the guard's exact rate before
+    grad = np.empty(n)
+    _guard_gradient(model, k, t, x, p, grad)
+    partials = np.empty(n + 2)
+    _carried_partials(model, k, t, x, mode, p, partials)
+    along = partials[n]                      # dc+/dt along the flow: c_y f- + c_t
+    for i in range(n):
+        along += partials[i] * f_before[i]
+    after = np.empty(n + count)
+    for c in range(n + count):
+        column, stride = _offset(n, c)
+        shift = 0.0                          # the event time's variation, times -(dg/dt)-
+        direct = 0.0                         # the value's own rate in the parameter
+        if c >= n:
+            plus, step = _moved(p, count, c - n, 1.0)
+            minus, step = _moved(p, count, c - n, -1.0)
+            models.guards(model, t, x, x, False, plus, vals, rates)
+            shift = vals[k]
+            models.guards(model, t, x, x, False, minus, vals, rates)
+            shift = (shift - vals[k]) / (2.0 * step)
+            direct = (_carried_value(model, k, t, x, mode, plus)
+                      - _carried_value(model, k, t, x, mode, minus)) / (2.0 * step)
+        acc = direct + partials[n + 1] * mode[first + c]
+        for i in range(n):
+            shift += grad[i] * y[column + i * stride]
+            acc += partials[i] * y[column + i * stride]
+        after[c] = acc - along * shift / rate
+    for c in range(n + count):
+        mode[first + c] = after[c]
 
 
 @numba.njit(cache=True)
@@ -255,6 +427,7 @@ def transition(model, count, k, t, y, values, mode, p):
     guard_rates = np.empty(count)
     if count > 0:
         _parameter_jumps(model, count, k, t, y[:n].copy(), values, mode, p, reset_rates, guard_rates)
+    _carried_jump(model, count, k, t, y, mode, p)
     salt = np.empty((n, n))
     jump = saltation(model, k, t, y[:n], values, mode, p, salt)
     before = y[n:].copy()
