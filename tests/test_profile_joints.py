@@ -1,0 +1,173 @@
+"""Events at the joints of a cam profile (guard 2 of the translating follower): no step
+straddles a joint, where the lift's second derivative jumps, and a follower in rigid
+sustained contact separates exactly at a joint beyond which the cam would pull.
+
+Expected values come from outside the model: the one-revolution map restarted at cam
+angle 0 each revolution (the bifurcation diagram's runs, checked against continuous runs
+in tests/test_poincare.py), the rig's joint angle and contact force written again here
+from its arcs (tests/test_translating_follower.py), and a SciPy solution of a compliant
+follower on a simple harmonic cam written here segment by segment between the joints.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from test_translating_follower import PHASE
+from test_translating_follower import contact_force as rig_force
+
+from camdyn.analysis.poincare import poincare_section
+from camdyn.integrator import driver
+from camdyn.model import translating_follower as model
+from camdyn.model.profiles import eccentric_circle, rise_return_profile, tabulated_profile
+from camdyn.simulation.translating import TranslatingFollower, alzate_rig, simulate_translating
+from camdyn.systems import registry as systems
+
+pytestmark = pytest.mark.filterwarnings("ignore::camdyn.simulation.limits.LargeResultWarning")
+#: the rig's joint of flank and nose [rad]: the flank arc ends where the nose arc begins,
+#: pi/2 (base dwell) + BETA2 (the flank's span) of tests/test_translating_follower.py
+FLANK_END = math.pi / 2 + 1.050328174371336
+REVOLUTIONS = 20
+
+
+def omega(rpm):
+    """Cam speed [rad/s] of ``rpm`` [rev/min]."""
+    return rpm * 2.0 * math.pi / 60.0
+
+
+@pytest.fixture(scope="module")
+def rig():
+    return alzate_rig()
+
+
+@pytest.mark.parametrize("rpm", [130.0, 160.0, 210.0, 250.0])
+def test_a_continuous_rigid_run_completes_and_follows_the_restarted_map(rig, rpm):
+    """Speeds at which one continuous run used to stop (the follower separating at the
+    joint of flank and nose, then grazing until the step collapsed): 20 revolutions
+    complete, and the state at cam angle 0 of each revolution is the one-revolution
+    map's, restarted at cam angle 0 each revolution at the same tolerance."""
+    w = omega(rpm)
+    period = 2.0 * math.pi / w
+    ds = simulate_translating(rig, w, REVOLUTIONS * period, sample_rate=16 / period)
+    assert ds.attrs["status"] == "completed"
+    section = poincare_section(rig, [rpm], transient=0, revolutions=REVOLUTIONS)
+    assert np.all(section.rtol.values == 1e-10)   # no revolution needed a fallback tolerance
+    kinds = ds.event_kind.values
+    assert np.count_nonzero(kinds == "separation") >= 1 and np.count_nonzero(kinds == "impact") >= 20
+    np.testing.assert_allclose(section.x.values[0], ds.x.values[16::16], rtol=0, atol=1e-10)
+    np.testing.assert_allclose(section.x_dot.values[0], ds.x_dot.values[16::16], rtol=0, atol=1e-10 * w)
+
+
+def test_the_follower_separates_exactly_at_the_joint(rig):
+    """At 130 rpm the contact force jumps below zero where the flank meets the nose: the
+    rig's force written from its arcs is positive just before the joint and negative just
+    after it, and every separation of a continuous run lies on the joint to 1e-12 rad."""
+    w = omega(130.0)
+    assert np.abs(rig.profile.joints - FLANK_END).min() < 1e-12   # the preset's cam angle is the rig's
+    joint_time = (FLANK_END - PHASE) / w   # the rig's force is written at the phase PHASE
+    assert rig_force(joint_time - 1e-9, w) > 0.0 > rig_force(joint_time + 1e-9, w)
+    period = 2.0 * math.pi / w
+    ds = simulate_translating(rig, w, 10 * period, sample_rate=8 / period)
+    separations = ds.event_time.values[ds.event_kind.values == "separation"]
+    assert separations.size >= 10
+    np.testing.assert_allclose((w * separations) % (2.0 * math.pi), FLANK_END, rtol=0, atol=1e-12)
+
+
+# --- a compliant follower held on a simple harmonic cam: the SciPy solution by segments
+
+LIFT, SPANS = 0.01, (2.0 * math.pi / 3.0, math.pi / 3.0, 2.0 * math.pi / 3.0, math.pi / 3.0)
+MASS, SPRING, PRELOAD, CONTACT = 0.5, 300.0, 20.0, 1e5
+SPEED = 40.0    # [rad/s]
+
+
+def harmonic_lift(theta):
+    """Lift [m] and its rate in the cam angle [m/rad] of the simple harmonic rise (span
+    beta, lift L: ``s = L/2 (1 - cos(pi u / beta))``, Norton 2009), dwell, return, dwell."""
+    a = theta % (2.0 * math.pi)
+    rise, top, fall, _ = SPANS
+    if a < rise:
+        return 0.5 * LIFT * (1.0 - math.cos(math.pi * a / rise)), 0.5 * LIFT * math.pi / rise * math.sin(
+            math.pi * a / rise)
+    if a < rise + top:
+        return LIFT, 0.0
+    if a < rise + top + fall:
+        u = a - rise - top
+        return 0.5 * LIFT * (1.0 + math.cos(math.pi * u / fall)), -0.5 * LIFT * math.pi / fall * math.sin(
+            math.pi * u / fall)
+    return 0.0, 0.0
+
+
+def scipy_solution(damping, times):
+    """The compliant follower ``m x'' = -F0 - k x + kc (s - x) + cc (s_dot - x')`` by
+    solve_ivp, restarted at every joint of the cam."""
+    def field(t, y):
+        s, s1 = harmonic_lift(SPEED * t)
+        return [y[1], (-PRELOAD - SPRING * y[0] + CONTACT * (s - y[0]) + damping * (SPEED * s1 - y[1])) / MASS]
+    joints = np.cumsum((0.0,) + SPANS) / SPEED
+    y = np.array([-PRELOAD / CONTACT, 0.0])   # at rest, pressed into the base circle
+    out = np.empty((times.size, 2))
+    for start, end in zip(joints[:-1], joints[1:]):
+        inside = (times >= start) & (times <= end)
+        sol = solve_ivp(field, (start, end), y, method="DOP853", rtol=1e-13, atol=1e-16, dense_output=True)
+        out[inside] = sol.sol(times[inside]).T
+        y = sol.y[:, -1]
+    return out
+
+
+def harmonic_follower(contact="compliant"):
+    profile = rise_return_profile([("harmonic", SPANS[0], LIFT), ("dwell", SPANS[1], 0.0),
+                                   ("harmonic", SPANS[2], -LIFT), ("dwell", SPANS[3], 0.0)], 0.05)
+    damping = model.penalty_damping(0.3, CONTACT, MASS)
+    return TranslatingFollower(profile, MASS, SPRING, PRELOAD, contact=contact, contact_stiffness=CONTACT,
+                               contact_damping=damping if contact == "compliant" else 0.0), damping
+
+
+def test_sustained_contact_converges_with_the_tolerance_across_joints():
+    """One revolution in contact (the penalty never lets go): the error against the
+    segment-by-segment SciPy solution falls at every rung of rtol from 1e-6 to 1e-11,
+    and a run at rtol 1e-12 completes."""
+    follower, damping = harmonic_follower()
+    period = 2.0 * math.pi / SPEED
+    times = np.linspace(0.0, period, 257)
+    expected = scipy_solution(damping, times)
+    errors = []
+    for rtol in (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12):
+        ds = simulate_translating(follower, SPEED, period, sample_rate=256 / period,
+                                  initial_state=(-PRELOAD / CONTACT, 0.0), rtol=rtol, atol=rtol * 1e-3)
+        assert ds.attrs["status"] == "completed" and ds.event_kind.size == 0
+        errors.append(np.abs(ds.x.values - expected[:, 0]).max())
+    assert all(later < earlier for earlier, later in zip(errors[:-2], errors[1:-1])), errors
+    assert errors[-1] < 1e-10, errors
+
+
+def test_rigid_sustained_contact_at_tight_tolerances_completes():
+    """Rigid contact held on the simple harmonic cam (below its lift-off speed) crosses 4
+    joints a revolution; at rtol 1e-12 and 1e-13 the step no longer collapses there."""
+    follower, _ = harmonic_follower("rigid")
+    period = 2.0 * math.pi / SPEED
+    for rtol in (1e-12, 1e-13):
+        ds = simulate_translating(follower, SPEED, 3 * period, sample_rate=64 / period, rtol=rtol,
+                                  atol=rtol * 1e-2)
+        assert ds.attrs["status"] == "completed" and ds.event_kind.size == 0
+        assert np.all(ds.in_contact.values == 1)
+
+
+@pytest.mark.parametrize("profile", [eccentric_circle(0.04, 0.01),
+                                     tabulated_profile(0.01 * (1.0 - np.cos(np.linspace(0, 2 * math.pi, 64,
+                                                                                        endpoint=False))), 0.05)],
+                         ids=["one arc", "spline"])
+def test_profiles_without_joints_have_no_joint_guard(profile):
+    """A one-segment profile and a spline: the joint guard is never active, so they log
+    no joint event and the runs are those of the model without it."""
+    follower = TranslatingFollower(profile, 0.5, 300.0, 5.0, restitution=0.5)
+    p = follower.pack(60.0)
+    assert not model.has_joints(p)
+    mode = np.zeros(model.MODE_SIZE)
+    model.initial_mode(0.0, np.zeros(2), p, mode)
+    assert systems.expected_sign(systems.TRANSLATING_FOLLOWER, model.JOINT, mode, p) == 0.0
+    t_out = np.linspace(0.0, 1.0, 11)
+    _, _, events, counters = driver.integrate(systems.TRANSLATING_FOLLOWER, p, np.zeros(2), 0.0, 1.0, t_out, 1e-10,
+                                              1e-12, 0.01, driver.METHOD_AUTO, 100_000, 1000)
+    assert counters[driver.COUNT_STATUS] == driver.STATUS_OK and events.shape[0] > 0
+    assert not np.any(events[:, driver.EVENT_GUARD] == model.JOINT)
