@@ -62,11 +62,18 @@ passes the next joint. At the event the model re-decides: in rigid sustained con
 the follower separates at the joint, with the cam's state, if the force N (eq. 3) on the
 far side of the joint is at most zero, else it stays; otherwise only the segment's index
 moves on (and the step restarts). Splines (``s''`` continuous) and one-segment profiles
-have no joint guard.
+have no joint guard. After a separation the gap starts at zero with zero rate (and at a
+joint a positive acceleration ``-N/m``): a smooth motion on the contact's time scale, so
+on a profile with joints the flight that follows takes the contact's step size
+(:func:`regime`) until the next impact; with the step of the last flight, which ended
+in an accumulation of impacts, the gap could stay below its rounding noise (a chain of
+grazes that collapses the step). Profiles without joints keep the flight's step, so
+that their runs stay those of the model without joint events.
 
-State ``(x [m], x' [m/s])``; mode ``(contact, approach, segment)``: 0 in flight, 1 in
-contact; the approach velocity [m/s] of the current contact (Hertz law); the index ``j``
-of the cam's segment counted over revolutions (profiles with joints, else 0).
+State ``(x [m], x' [m/s])``; mode ``(contact, approach, segment, released)``: 0 in
+flight, 1 in contact; the approach velocity [m/s] of the current contact (Hertz law);
+the index ``j`` of the cam's segment counted over revolutions (profiles with joints,
+else 0); 1 in a flight that began with a separation (profiles with joints), else 0.
 
 Parameter vector ``p``: the slots below, then the profile table from :data:`PROFILE`.
 """
@@ -112,9 +119,10 @@ FACES = {"flat": 0.0, "knife": 1.0, "roller": 2.0}
 ROLLER_FACE = 2.0
 STATE_SIZE = 2
 GUARD_COUNT = 3
-MODE_SIZE = 3
+MODE_SIZE = 4
 JOINT = 2           # the joint guard's index
 SEGMENT = 2         # the mode's slot of the segment index j (counted over revolutions)
+RELEASED = 3        # the mode's slot: 1 in flight after a separation (profiles with joints), until an impact
 
 
 @numba.njit(cache=True)
@@ -316,20 +324,25 @@ def transition(k, t, y, mode, p):
         mode[0] = 1.0 - mode[0]
         mode[1] = cam(t, p)[2] - y[1] if mode[0] > 0.5 else 0.0
         return
-    _, s, sd, sdd, _ = cam(t, p)
+    theta, s, sd, sdd, _ = cam(t, p)
     if k == 1:   # the contact force fell to zero: separation, from the cam's state
         mode[0] = 0.0
         y[0] = s
         y[1] = sd
+        if has_joints(p):   # the force may have jumped below zero at a joint not yet taken
+            mode[SEGMENT] = segment_at(theta, p)[0]
+            mode[RELEASED] = 1.0
         return
     approach = y[1] - sd
     if -approach > p[CAPTURE]:
         y[1] = sd - p[RESTITUTION] * approach   # eq. (2)
+        mode[RELEASED] = 0.0
         return
     y[0] = s
     y[1] = sd
     if p[MASS] * sdd + spring_force(s, sd, p) > 0.0:   # captured: the cam holds it
         mode[0] = 1.0
+        mode[RELEASED] = 0.0
 
 
 @numba.njit(cache=True)
@@ -344,6 +357,7 @@ def joint_transition(t, y, mode, p):
     s, sd, sdd = far_side(t, j, p)
     if p[MASS] * sdd + spring_force(s, sd, p) <= 0.0:
         mode[0] = 0.0
+        mode[RELEASED] = 1.0
         y[0] = s
         y[1] = sd
 
@@ -357,11 +371,20 @@ def initial_mode(t, y, p, mode):
     mode[0] = 0.0
     mode[1] = 0.0   # no approach under way: the restitution laws use the reference velocity
     mode[SEGMENT] = segment_at(p[PHASE] + p[SPEED] * t, p)[0] if has_joints(p) else 0.0
+    mode[RELEASED] = 0.0
     if p[LAW] != RIGID:
         if gap < 0.0:
             mode[0] = 1.0
     elif gap <= 0.0 and p[MASS] * sdd + spring_force(s, sd, p) > 0.0:
         mode[0] = 1.0
+
+
+@numba.njit(cache=True)
+def regime(mode):
+    """The driver's regime of the mode (its last step size starts the next after an
+    event): 1 in contact and in the flight after a separation (profiles with joints),
+    else 0."""
+    return 1 if mode[0] > 0.5 or mode[RELEASED] > 0.5 else 0
 
 
 def pack(profile, mass, stiffness, preload, speed, damping=0.0, phase=0.0, gravity=0.0, law=RIGID,
