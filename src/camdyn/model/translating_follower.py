@@ -200,10 +200,16 @@ def contact_force(t, y, mode, p):
 def rhs(t, y, mode, p, dydt):
     """Eq. (1), plus the penalty in compliant contact. In rigid contact the follower moves
     with the cam, ``x' = s_dot``, ``x'' = s_ddot`` (the outputs take the cam's state itself,
-    :func:`follower_state`). No step straddles a joint of the profile, where ``s''`` may
-    jump: the joint guard (guard 2) ends the step there."""
+    :func:`follower_state`). On a profile with joints it follows the law of the mode's
+    segment, continued past the segment's end (:func:`far_side`): a step that reaches
+    past a joint integrates a smooth function, so the step control does not shrink the
+    steps towards the joint before the joint guard (guard 2) can end the step there
+    (with the cam's own jumping ``s''`` it did, down to picoseconds)."""
     if p[LAW] == RIGID and mode[0] > 0.5:
-        _, _, sd, sdd, _ = cam(t, p)
+        if has_joints(p):
+            _, sd, sdd = far_side(t, mode[SEGMENT], p)
+        else:
+            _, _, sd, sdd, _ = cam(t, p)
         dydt[0] = sd
         dydt[1] = sdd
         return
@@ -278,7 +284,9 @@ def far_side(t, j, p):
     w = p[SPEED]
     angle = (p[PHASE] + w * t) % profiles.TWO_PI
     past = angle - p[row + 1]
-    if past > math.pi:   # the segment that starts at 0, reached from just below 2 pi
+    if past < 0.0:
+        past += profiles.TWO_PI
+    if past > 0.5 * (p[row + 2] + profiles.TWO_PI):   # nearer the start than the end: before it
         past -= profiles.TWO_PI
     s, s1, s2, _ = lift_laws.segment(p[row:row + profiles.ROW], p[row + 1] + past)
     return s, w * s1, w * w * s2
