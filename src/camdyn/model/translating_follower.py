@@ -61,8 +61,10 @@ keeps ``j``, and the guard's expected sign is ``(-1)^j``, so it crosses where th
 passes the next joint. At the event the model re-decides: in rigid sustained contact
 the follower separates at the joint, with the cam's state, if the force N (eq. 3) on the
 far side of the joint is at most zero, else it stays; otherwise only the segment's index
-moves on (and the step restarts). Splines (``s''`` continuous) and one-segment profiles
-have no joint guard. After a separation the gap starts at zero with zero rate (and at a
+moves on (and the step restarts). In rigid contact the state follows the law of the
+mode's segment, continued past its end, so that a step reaching past the joint stays
+smooth until the guard ends it there. Splines (``s''`` continuous) and one-segment
+profiles have no joint guard. After a separation the gap starts at zero with zero rate (and at a
 joint a positive acceleration ``-N/m``): a smooth motion on the contact's time scale, so
 on a profile with joints the flight that follows takes the contact's step size
 (:func:`regime`) until the next impact; with the step of the last flight, which ended
@@ -277,8 +279,10 @@ def joint_guard(t, p):
 @numba.njit(cache=True)
 def far_side(t, j, p):
     """The cam's lift [m], lift rate [m/s] and acceleration [m/s^2] at ``t`` [s] by the
-    law of segment ``j`` (counted over revolutions) continued to ``t``: on the far side
-    of the joint at its start, as the cam is once it has passed it."""
+    law of segment ``j`` (counted over revolutions) continued to ``t`` (before its start
+    or past its end, whichever is nearer): on the far side of the joint at its start, as
+    the cam is once it has passed it, and in contact until the joint at its end is
+    taken."""
     n = int(p[PROFILE])
     row = PROFILE + 1 + (int(j) % n) * profiles.ROW
     w = p[SPEED]
