@@ -69,8 +69,8 @@ def poincare_section(follower: TranslatingFollower, speeds, transient: int = 100
 
     Each speed starts from the follower resting on the cam at cam angle 0 and iterates the
     one-revolution map: a run of one revolution from cam angle 0, started from the state
-    the previous one ended in. A revolution whose run stops (the rigid contact's event
-    handling can stall where the follower separates at a joint of the profile) is run
+    the previous one ended in. A revolution whose run stops (rare since the profile's joints
+    are events of the model; one long run then works as well) is run
     again at the tolerances of :data:`FALLBACK_RTOLS`; the tolerance that completed each
     revolution is recorded. The first ``transient`` revolutions are dropped.
 

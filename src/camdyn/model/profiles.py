@@ -53,18 +53,25 @@ JOINT_TOLERANCE = 1e-9
 def evaluate(table, start, theta):
     """Lift and derivatives ``(s [m], s' [m/rad], s'' [m/rad^2], s''' [m/rad^3])`` at the
     cam angle ``theta`` [rad] of the profile table stored in ``table[start:]``."""
-    n = int(table[start])
     angle = theta % TWO_PI
+    first = start + 1 + segment_index(table, start, angle) * ROW
+    return laws.segment(table[first:first + ROW], angle)
+
+
+@numba.njit(cache=True)
+def segment_index(table, start, angle):
+    """Index of the segment of the profile table in ``table[start:]`` under the cam angle
+    ``angle`` [rad] in ``[0, 2 pi)``: the last row whose start is at most ``angle``
+    (by bisection)."""
     lo = 0
-    hi = n - 1
-    while lo < hi:   # the last row whose start is <= angle
+    hi = int(table[start]) - 1
+    while lo < hi:
         mid = (lo + hi + 1) // 2
         if table[start + 1 + mid * ROW + 1] <= angle:
             lo = mid
         else:
             hi = mid - 1
-    first = start + 1 + lo * ROW
-    return laws.segment(table[first:first + ROW], angle)
+    return lo
 
 
 @dataclass(frozen=True)

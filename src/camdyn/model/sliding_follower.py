@@ -41,12 +41,13 @@ its spin through it and then slides until friction has spun it up to rolling (th
 
 State ``(x [m], x' [m/s], omega_r [rad/s], Q [J])``, ``Q`` the heat of friction, ``Q' =
 mu_k N |u|`` while sliding; only ``x`` and ``x'`` are error-controlled (so that without
-friction the steps, and the results, are the translating follower's). Mode ``(contact,
-approach, slip)``: slip is ``sign(u)`` while sliding, 0 while rolling. Guards: 0 the gap
-and 1 the line force of the translating follower; 2 the slip velocity ``u`` (rate ``u' =
-omega^2 L_theta + r_r omega_r'``, a sliding roller); 3 and 4 ``mu_s N - F`` and ``mu_s N
-+ F`` (a rolling roller; rates by central differences in time, the rolling contact being
-a function of time alone).
+friction the steps, and the results, are the translating follower's). Mode: the
+translating follower's (contact, approach, segment, released), then slip: ``sign(u)``
+while sliding, 0 while rolling. Guards: the translating follower's (0 the gap, 1 the line
+force, 2 the profile's joints), then :data:`SLIP_GUARD` the slip velocity ``u`` (rate
+``u' = omega^2 L_theta + r_r omega_r'``, a sliding roller) and :data:`CONE`, ``CONE + 1``
+the margins ``mu_s N - F`` and ``mu_s N + F`` (a rolling roller; rates by central
+differences in time, the rolling contact being a function of time alone).
 
 Parameter vector: the translating follower's, then ``(mu_s, mu_k, J_r [kg m^2])`` as its
 last three slots (read from the end, after the profile table).
@@ -67,9 +68,11 @@ from camdyn.model import translating_follower as tf
 
 STATE_SIZE = 4
 CONTROLLED_SIZE = 2
-GUARD_COUNT = 5
-MODE_SIZE = 3
-SLIP = 2          # mode slot: sign of the slip velocity, 0 rolling
+SLIP_GUARD = tf.GUARD_COUNT       # guard of the slip velocity u, after the translating follower's
+CONE = tf.GUARD_COUNT + 1         # guards of the cone margins mu_s N - F and mu_s N + F
+GUARD_COUNT = tf.GUARD_COUNT + 3
+SLIP = tf.MODE_SIZE               # mode slot: sign of the slip velocity, 0 rolling
+MODE_SIZE = tf.MODE_SIZE + 1
 FRICTION_SLOTS = 3
 FLAT_FACE = 0.0
 KNIFE_FACE = 1.0
@@ -179,42 +182,42 @@ def jacobian(t, y, mode, p, jac):
 @numba.njit(cache=True)
 def cone(t, p, values):
     """``mu_s N - F`` and ``mu_s N + F`` [N] of rolling contact at ``t`` [s] into
-    ``values[3:5]``."""
+    ``values[CONE]`` and ``values[CONE + 1]``."""
     normal, friction, _ = forces(t, 0.0, p)
     mu_s = coefficients(p)[0]
-    values[3] = mu_s * normal - friction
-    values[4] = mu_s * normal + friction
+    values[CONE] = mu_s * normal - friction
+    values[CONE + 1] = mu_s * normal + friction
 
 
 @numba.njit(cache=True)
 def guards(t, y, f, known, p, values, rates):
-    """Guards 0-4 (module docstring) and their rates."""
+    """The guards (module docstring) and their rates."""
     tf.guards(t, y, p, values, rates)
     w = p[tf.SPEED]
-    values[2] = slip_velocity(t, y[2], p)
-    rates[2] = w * w * geometry(t, p)[3] + p[tf.ROLLER_RADIUS] * (f[2] if known else math.nan)
+    values[SLIP_GUARD] = slip_velocity(t, y[2], p)
+    rates[SLIP_GUARD] = w * w * geometry(t, p)[3] + p[tf.ROLLER_RADIUS] * (f[2] if known else math.nan)
     if not rolls(p):
-        values[3] = values[4] = rates[3] = rates[4] = 1.0
+        values[CONE] = values[CONE + 1] = rates[CONE] = rates[CONE + 1] = 1.0
         return
     h = RATE_STEP / w
-    ahead = np.empty(5)
-    behind = np.empty(5)
+    ahead = np.empty(GUARD_COUNT)
+    behind = np.empty(GUARD_COUNT)
     cone(t + h, p, ahead)
     cone(t - h, p, behind)
     cone(t, p, values)
-    rates[3] = (ahead[3] - behind[3]) / (2.0 * h)
-    rates[4] = (ahead[4] - behind[4]) / (2.0 * h)
+    for k in (CONE, CONE + 1):
+        rates[k] = (ahead[k] - behind[k]) / (2.0 * h)
 
 
 @numba.njit(cache=True)
 def expected_sign(k, mode, p):
     """Gap and line force as the translating follower; the slip velocity keeps its sign
     while a roller slides, the cone margins stay positive while it rolls."""
-    if k < 2:
+    if k < SLIP_GUARD:
         return tf.expected_sign(k, mode, p)
     if not (rolls(p) and in_contact(mode, p)):
         return 0.0
-    if k == 2:
+    if k == SLIP_GUARD:
         return mode[SLIP]
     return 1.0 if mode[SLIP] == 0.0 else 0.0
 
@@ -249,20 +252,27 @@ def settle(t, y, mode, p):
 
 @numba.njit(cache=True)
 def transition(k, t, y, mode, p):
-    """Guards 0 and 1: the translating follower's impact, capture and separation (the
-    spin kept), then the slip mode of a new contact; guard 2: the slip velocity vanished,
-    rolling if the cone holds (the spin set to rolling's exactly), else a reversal; guards
-    3 and 4: the cone broke, sliding with ``u < 0`` or ``u > 0``."""
-    if k < 2:
+    """The translating follower's guards: its impact, capture, separation and joints (the
+    spin kept), then the slip mode of a new contact; :data:`SLIP_GUARD`: the slip velocity
+    vanished, rolling if the cone holds (the spin set to rolling's exactly), else a
+    reversal; :data:`CONE` and ``CONE + 1``: the cone broke, sliding with ``u < 0`` or
+    ``u > 0``."""
+    if k < SLIP_GUARD:
         was = mode[0]
         tf.transition(k, t, y, mode, p)
         if mode[0] > 0.5 and was < 0.5:
             settle(t, y, mode, p)
         return
-    if k == 2:
+    if k == SLIP_GUARD:
         hold_or_slip(t, y, mode, p)
         return
-    mode[SLIP] = -1.0 if k == 3 else 1.0
+    mode[SLIP] = -1.0 if k == CONE else 1.0
+
+
+@numba.njit(cache=True)
+def regime(mode):
+    """The translating follower's regime (:func:`camdyn.model.translating_follower.regime`)."""
+    return tf.regime(mode)
 
 
 @numba.njit(cache=True)

@@ -68,8 +68,34 @@ delta_n')`` [N] of eqs. (4)-(7) acts on the arm with the moment::
 where the two tables start in ``p`` (0 without them: a translating follower, whose
 results they leave unchanged).
 
-State ``(x [m], x' [m/s])``; mode ``(contact, approach)``: 0 in flight, 1 in contact, and
-the approach velocity [m/s] of the current contact (Hertz law).
+
+**Joints.** A profile of more than one segment that is not a spline (circular arcs,
+rises and returns) has joints, the segments' start angles, where ``s''`` (and so the rigid
+contact's force N, and the gap's acceleration) may jump. Guard 2 makes each joint an
+event, so that no step straddles one: with ``u`` [rad] the cam angle past the start of
+the segment under it, ``L`` [rad] the segment's span and ``j`` the segment's index counted
+over revolutions (``index + n revolution`` of ``n`` segments), the guard is
+``(-1)^j u (L - u) / L`` [rad], zero at both joints of the segment, of the segment's
+sign inside it, with its exact rate ``(-1)^j omega (L - 2u) / L`` [rad/s]; the mode
+keeps ``j``, and the guard's expected sign is ``(-1)^j``, so it crosses where the cam
+passes the next joint. At the event the model re-decides: in rigid sustained contact
+the follower separates at the joint, with the cam's state, if the force N (eq. 3) on the
+far side of the joint is at most zero, else it stays; otherwise only the segment's index
+moves on (and the step restarts). In rigid contact the state follows the law of the
+mode's segment, continued past its end, so that a step reaching past the joint stays
+smooth until the guard ends it there. Splines (``s''`` continuous) and one-segment
+profiles have no joint guard. After a separation the gap starts at zero with zero rate (and at a
+joint a positive acceleration ``-N/m``): a smooth motion on the contact's time scale, so
+on a profile with joints the flight that follows takes the contact's step size
+(:func:`regime`) until the next impact; with the step of the last flight, which ended
+in an accumulation of impacts, the gap could stay below its rounding noise (a chain of
+grazes that collapses the step). Profiles without joints keep the flight's step, so
+that their runs stay those of the model without joint events.
+
+State ``(x [m], x' [m/s])``; mode ``(contact, approach, segment, released)``: 0 in
+flight, 1 in contact; the approach velocity [m/s] of the current contact (Hertz law);
+the index ``j`` of the cam's segment counted over revolutions (profiles with joints,
+else 0); 1 in a flight that began with a separation (profiles with joints), else 0.
 
 Parameter vector ``p``: the slots below, then the profile table from :data:`PROFILE`.
 """
@@ -83,7 +109,7 @@ import numpy as np
 
 from camdyn.errors import ParameterError
 from camdyn.model import contact as hertz
-from camdyn.model import profiles
+from camdyn.model import lift_laws, profiles
 
 MASS = 0            # m [kg]
 STIFFNESS = 1       # k [N/m]
@@ -116,8 +142,11 @@ HERTZ = 2.0
 FACES = {"flat": 0.0, "knife": 1.0, "roller": 2.0}
 ROLLER_FACE = 2.0
 STATE_SIZE = 2
-GUARD_COUNT = 2
-MODE_SIZE = 2
+GUARD_COUNT = 3
+MODE_SIZE = 4
+JOINT = 2           # the joint guard's index
+SEGMENT = 2         # the mode's slot of the segment index j (counted over revolutions)
+RELEASED = 3        # the mode's slot: 1 in flight after a separation (profiles with joints), until an impact
 
 
 @numba.njit(cache=True)
@@ -219,14 +248,16 @@ def contact_force(t, y, mode, p):
 def rhs(t, y, mode, p, dydt):
     """Eq. (1), plus the penalty in compliant contact. In rigid contact the follower moves
     with the cam, ``x' = s_dot``, ``x'' = s_ddot`` (the outputs take the cam's state itself,
-    :func:`follower_state`). The integration in contact also makes the step control see
-    the joints of the profile, where ``s''`` and so the contact force jump: a step across
-    a joint is shortened, so that a contact force dipping below zero just after a joint
-    is not stepped over. (At rtol 1e-12 or tighter the jumps of ``s''`` of a simple
-    harmonic or circular-arc cam can then shrink the step below the resolution of
-    time.)"""
+    :func:`follower_state`). On a profile with joints it follows the law of the mode's
+    segment, continued past the segment's end (:func:`far_side`): a step that reaches
+    past a joint integrates a smooth function, so the step control does not shrink the
+    steps towards the joint before the joint guard (guard 2) can end the step there
+    (with the cam's own jumping ``s''`` it did, down to picoseconds)."""
     if p[LAW] == RIGID and mode[0] > 0.5:
-        _, _, sd, sdd, _ = cam(t, p)
+        if has_joints(p):
+            _, sd, sdd = far_side(t, mode[SEGMENT], p)
+        else:
+            _, _, sd, sdd, _ = cam(t, p)
         dydt[0] = sd
         dydt[1] = sdd
         return
@@ -263,21 +294,77 @@ def jacobian(t, y, mode, p, jac):
 
 
 @numba.njit(cache=True)
+def has_joints(p):
+    """Whether the profile has joints (more than one segment, not a spline)."""
+    return p[PROFILE] > 1.5 and p[PROFILE + 1] != lift_laws.CUBIC
+
+
+@numba.njit(cache=True)
+def segment_at(theta, p):
+    """The segment under the cam angle ``theta`` [rad]: its index ``j`` counted over
+    revolutions (``index + n revolution``), the angle ``u`` [rad] past its start and its
+    span ``L`` [rad]."""
+    angle = theta % profiles.TWO_PI
+    turns = round((theta - angle) / profiles.TWO_PI)
+    index = profiles.segment_index(p, PROFILE, angle)
+    row = PROFILE + 1 + index * profiles.ROW
+    return index + p[PROFILE] * turns, angle - p[row + 1], p[row + 2]
+
+
+@numba.njit(cache=True)
+def joint_guard(t, p):
+    """The joint guard ``(-1)^j u (L - u) / L`` [rad] and its rate [rad/s] at ``t`` [s]
+    (see the module's docstring); 0 for a profile without joints."""
+    if not has_joints(p):
+        return 0.0, 0.0
+    j, u, span = segment_at(p[PHASE] + p[SPEED] * t, p)
+    sign = 1.0 if int(j) % 2 == 0 else -1.0
+    return sign * u * (span - u) / span, sign * p[SPEED] * (span - 2.0 * u) / span
+
+
+@numba.njit(cache=True)
+def far_side(t, j, p):
+    """The cam's lift [m], lift rate [m/s] and acceleration [m/s^2] at ``t`` [s] by the
+    law of segment ``j`` (counted over revolutions) continued to ``t`` (before its start
+    or past its end, whichever is nearer): on the far side of the joint at its start, as
+    the cam is once it has passed it, and in contact until the joint at its end is
+    taken."""
+    n = int(p[PROFILE])
+    row = PROFILE + 1 + (int(j) % n) * profiles.ROW
+    w = p[SPEED]
+    angle = (p[PHASE] + w * t) % profiles.TWO_PI
+    past = angle - p[row + 1]
+    if past < 0.0:
+        past += profiles.TWO_PI
+    if past > 0.5 * (p[row + 2] + profiles.TWO_PI):   # nearer the start than the end: before it
+        past -= profiles.TWO_PI
+    s, s1, s2, _ = lift_laws.segment(p[row:row + profiles.ROW], p[row + 1] + past)
+    return s, w * s1, w * w * s2
+
+
+@numba.njit(cache=True)
 def guards(t, y, p, values, rates):
     """Guard 0: the gap ``x - s`` [m] and its rate [m/s]; guard 1: the force N [N] of
-    sustained rigid contact (eq. 3) and its rate [N/s]."""
+    sustained rigid contact (eq. 3) and its rate [N/s]; guard 2: the joints [rad] and
+    the rate [rad/s] (:func:`joint_guard`)."""
     _, s, sd, sdd, sddd = cam(t, p)
     values[0] = y[0] - s
     rates[0] = y[1] - sd
     values[1] = p[MASS] * sdd + spring_force(s, sd, p)
     rates[1] = p[MASS] * sddd + p[STIFFNESS] * sd + p[DAMPING] * sdd
+    values[JOINT], rates[JOINT] = joint_guard(t, p)
 
 
 @numba.njit(cache=True)
 def expected_sign(k, mode, p):
     """The gap (guard 0) stays positive in flight and negative in compliant contact; the
-    force of rigid contact (guard 1) stays positive while in contact."""
+    force of rigid contact (guard 1) stays positive while in contact; the joint guard
+    (guard 2) has the sign ``(-1)^j`` of the segment ``j`` the mode holds."""
     contact = mode[0] > 0.5
+    if k == JOINT:
+        if not has_joints(p):
+            return 0.0
+        return 1.0 if int(mode[SEGMENT]) % 2 == 0 else -1.0
     if k == 0:
         if not contact:
             return 1.0
@@ -288,24 +375,49 @@ def expected_sign(k, mode, p):
 @numba.njit(cache=True)
 def transition(k, t, y, mode, p):
     """The mode after guard ``k`` crossed at ``t`` [s], and the reset of the state."""
+    if k == JOINT:
+        joint_transition(t, y, mode, p)
+        return
     if p[LAW] != RIGID:   # a penalty law: contact onset (with its approach velocity) or end
         mode[0] = 1.0 - mode[0]
         mode[1] = approach_velocity(t, y, p) if mode[0] > 0.5 else 0.0
         return
-    _, s, sd, sdd, _ = cam(t, p)
+    theta, s, sd, sdd, _ = cam(t, p)
     if k == 1:   # the contact force fell to zero: separation, from the cam's state
         mode[0] = 0.0
         y[0] = s
         y[1] = sd
+        if has_joints(p):   # the force may have jumped below zero at a joint not yet taken
+            mode[SEGMENT] = segment_at(theta, p)[0]
+            mode[RELEASED] = 1.0
         return
     approach = y[1] - sd
     if -approach > p[CAPTURE]:
         y[1] = sd - p[RESTITUTION] * approach   # eq. (2)
+        mode[RELEASED] = 0.0
         return
     y[0] = s
     y[1] = sd
     if p[MASS] * sdd + spring_force(s, sd, p) > 0.0:   # captured: the cam holds it
         mode[0] = 1.0
+        mode[RELEASED] = 0.0
+
+
+@numba.njit(cache=True)
+def joint_transition(t, y, mode, p):
+    """The cam passed the joint at the start of segment ``j + 1`` at ``t`` [s]: the mode
+    moves on to it; in rigid sustained contact the follower separates there, with the
+    cam's state on the far side, if the force N (eq. 3) there is at most zero."""
+    j = mode[SEGMENT] + 1.0
+    mode[SEGMENT] = j
+    if p[LAW] != RIGID or mode[0] < 0.5:
+        return
+    s, sd, sdd = far_side(t, j, p)
+    if p[MASS] * sdd + spring_force(s, sd, p) <= 0.0:
+        mode[0] = 0.0
+        mode[RELEASED] = 1.0
+        y[0] = s
+        y[1] = sd
 
 
 @numba.njit(cache=True)
@@ -316,11 +428,21 @@ def initial_mode(t, y, p, mode):
     gap = y[0] - s
     mode[0] = 0.0
     mode[1] = 0.0   # no approach under way: the restitution laws use the reference velocity
+    mode[SEGMENT] = segment_at(p[PHASE] + p[SPEED] * t, p)[0] if has_joints(p) else 0.0
+    mode[RELEASED] = 0.0
     if p[LAW] != RIGID:
         if gap < 0.0:
             mode[0] = 1.0
     elif gap <= 0.0 and p[MASS] * sdd + spring_force(s, sd, p) > 0.0:
         mode[0] = 1.0
+
+
+@numba.njit(cache=True)
+def regime(mode):
+    """The driver's regime of the mode (its last step size starts the next after an
+    event): 1 in contact and in the flight after a separation (profiles with joints),
+    else 0."""
+    return 1 if mode[0] > 0.5 or mode[RELEASED] > 0.5 else 0
 
 
 def pack(profile, mass, stiffness, preload, speed, damping=0.0, phase=0.0, gravity=0.0, law=RIGID,

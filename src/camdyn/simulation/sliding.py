@@ -22,7 +22,7 @@ from camdyn.model import sliding_follower as model
 from camdyn.model import translating_follower as base
 from camdyn.model.profiles import pressure_angle
 from camdyn.simulation import limits
-from camdyn.simulation.translating import TranslatingFollower
+from camdyn.simulation.translating import TranslatingFollower, leaves_at_joint
 from camdyn.systems import registry as systems
 
 __all__ = ["FollowerFriction", "simulate_sliding", "jamming_margin", "friction_from_spec"]
@@ -217,29 +217,40 @@ def _samples(p, t, y, modes):
     return columns
 
 
-def _event_kinds(p, events):
+def _event_kinds(p, events, contact):
+    """Kinds and approach velocities [m/s] of the logged events, ``contact`` whether the
+    run starts in sustained contact; a joint of the profile is a separation where the
+    follower leaves the cam there, else the kind ``joint``."""
     m = model.GUARD_COUNT
     kinds, velocities = [], []
     for ev in events:
         t, k, v = ev[0], int(ev[1]), ev[driver.EVENT_GUARDS + m + 1]
         sd = base.cam(t, p)[2]
-        if k == 1:
+        if k == base.JOINT:
+            leaves = contact and leaves_at_joint(t, p)
+            contact = contact and not leaves
+            kinds.append("separation" if leaves else "joint")
+        elif k == 1:
             kinds.append("separation")
-        elif k == 2:
+            contact = False
+        elif k == model.SLIP_GUARD:
             kinds.append("rolling" if ev[driver.EVENT_NEW_SIGN] == 0.0 else "reversal")
-        elif k > 2:
+        elif k > model.SLIP_GUARD:
             kinds.append("slip")
         elif -(v - sd) > p[base.CAPTURE]:
             kinds.append("impact")
         else:
-            kinds.append("capture" if ev[driver.EVENT_NEW_SIGN] == 0.0 else "graze")
+            contact = ev[driver.EVENT_NEW_SIGN] == 0.0
+            kinds.append("capture" if contact else "graze")
         velocities.append(v - sd)
     return np.array(kinds, dtype=str), np.array(velocities, dtype=float)
 
 
 def _dataset(p, t, y, modes, events):
     c = _samples(p, t, y, modes)
-    kinds, velocities = _event_kinds(p, events)
+    kinds, velocities = _event_kinds(p, events, modes.shape[0] > 0 and modes[0, 0] > 0.5)
+    shown = kinds != "joint"   # the joints that changed nothing are left out
+    events, kinds, velocities = events[shown], kinds[shown], velocities[shown]
     rolling = (modes[:, 0] > 0.5) & (modes[:, model.SLIP] == 0.0)
     series = (("x", 0, "m", "follower position from the base circle"), ("x_dot", 1, "m/s", "follower velocity"),
               ("lift", 2, "m", "cam lift s"), ("contact_force", 3, "N", "normal force N of the cam on the follower"),

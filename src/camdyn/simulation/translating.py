@@ -316,7 +316,8 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
         the ``contact_force`` and ``in_contact``; over ``event``: ``event_time``,
         ``event_kind`` (``impact``, ``capture`` into sustained contact, ``graze``: a
         touch slower than the capture velocity where the cam does not push, which leaves
-        the follower in flight, ``separation``, and for the compliant and Hertz laws
+        the follower in flight, ``separation``, where the force falls to zero or at a
+        joint of the profile beyond which the cam would pull, and for the compliant and Hertz laws
         ``contact onset`` and ``contact end``), ``event_velocity`` (approach velocity of an impact, ``x_dot -
         s_dot`` [m/s]). Attributes hold the parameters and the solver counters.
     """
@@ -360,24 +361,42 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
     return _dataset(follower, p, t_out, y, modes, events, counters, elapsed, speed, phase, rtol, atol)
 
 
-def _event_table(events, p):
-    """Kinds and approach velocities [m/s] of the logged events."""
+def leaves_at_joint(t, p):
+    """Whether a follower in rigid sustained contact leaves the cam at the profile's joint
+    it reaches at ``t`` [s]: the force N (eq. 3) on the joint's far side is at most zero
+    (the model's rule, :func:`camdyn.model.translating_follower.joint_transition`)."""
+    segment = model.segment_at(p[model.PHASE] + p[model.SPEED] * t, p)[0]
+    s, s_dot, s_ddot = model.far_side(t, segment, p)
+    return p[model.MASS] * s_ddot + model.spring_force(s, s_dot, p) <= 0.0
+
+
+def _event_table(events, p, contact):
+    """Kinds and approach velocities [m/s] of the logged events, ``contact`` whether the
+    run starts in sustained contact. A joint of the profile (guard 2) is a separation
+    where the follower leaves the cam there, else the kind ``joint``."""
     m = systems.guard_count(systems.TRANSLATING_FOLLOWER)
     kinds, velocities = [], []
     for ev in events:
         t, k, v = ev[0], int(ev[1]), ev[driver.EVENT_GUARDS + m + 1]
         sd = model.cam(t, p)[2]
-        if p[model.LAW] != model.RIGID:
+        if k == model.JOINT:
+            kind = "joint"
+            if contact and p[model.LAW] == model.RIGID and leaves_at_joint(t, p):
+                kind, contact = "separation", False
+            kinds.append(kind)
+        elif p[model.LAW] != model.RIGID:
             kinds.append("contact onset" if ev[2] < 0 else "contact end")
         elif k == 1:
             kinds.append("separation")
+            contact = False
         elif -(v - sd) > p[model.CAPTURE]:
             kinds.append("impact")
         else:
             # a touch slower than the capture velocity: held on the cam where it pushes,
             # else a graze (the gap's rounding noise just after a separation, where gap,
             # rate and gap acceleration all start at zero), which changes nothing
-            kinds.append("capture" if ev[driver.EVENT_NEW_SIGN] == 0.0 else "graze")
+            contact = ev[driver.EVENT_NEW_SIGN] == 0.0
+            kinds.append("capture" if contact else "graze")
         velocities.append(v - sd)
     return np.array(kinds, dtype=str), np.array(velocities, dtype=float)
 
@@ -390,7 +409,9 @@ def _dataset(follower, p, t, y, modes, events, counters, elapsed, speed, phase, 
         lift[i] = model.cam(ti, p)[1:]
         y[i] = model.follower_state(ti, y[i], modes[i], p)
         force[i] = model.contact_force(ti, y[i], modes[i], p)
-    kinds, velocities = _event_table(events, p)
+    kinds, velocities = _event_table(events, p, modes.shape[0] > 0 and modes[0, 0] > 0.5)
+    shown = kinds != "joint"   # the joints that changed nothing are left out
+    events, kinds, velocities = events[shown], kinds[shown], velocities[shown]
     data = {
         "x": (("time",), y[:, 0], {"units": "m", "long_name": "follower position from the base circle"}),
         "x_dot": (("time",), y[:, 1], {"units": "m/s", "long_name": "follower velocity"}),

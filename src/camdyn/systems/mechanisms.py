@@ -135,6 +135,8 @@ def regime(system, mode, p):
         return 0 if mode[0] == 0.0 else 1
     if system == TWO_FOLLOWERS:
         return pair.regime(mode)
+    if system == SLIDING_FOLLOWER:
+        return sliding.regime(mode)
     return 1 if mode[L.MODE_CONTACT] > 0.5 else 0
 
 

@@ -25,7 +25,7 @@ impacts reset the state in :func:`transition`; system 3 is two coupled oscillato
 second against a wall (:mod:`camdyn.model.coupled_oscillator`, 4 states, 1 guard). The
 three test the integrator. System 4 is a translating follower on a cam of any profile,
 with rigid (Newton restitution, sustained contact) or compliant contact
-(:mod:`camdyn.model.translating_follower`, 2 states, 2 guards). The mechanisms, ids 5
+(:mod:`camdyn.model.translating_follower`, 2 states, 3 guards: gap, force, joints). The mechanisms, ids 5
 and up, are dispatched by :mod:`camdyn.systems.mechanisms`, each function here sending
 them there in its first lines: system 5 is the stick-slip oscillator
 (:mod:`camdyn.model.stick_slip`, 3 states, 3 guards) and system 6 the cam-follower with
@@ -293,7 +293,7 @@ def regime(system, mode, p):
     if system == CAM_FOLLOWER:
         return 1 if mode[L.MODE_CONTACT] > 0.5 else 0
     if system == TRANSLATING_FOLLOWER:
-        return 1 if mode[0] > 0.5 else 0
+        return translating.regime(mode)
     return 0
 
 
