@@ -4,10 +4,14 @@ For the unmutated source and for each mutant, the script copies ``src/`` to a te
 folder, applies the mutant's exact text replacements to the copy (a replacement whose
 text is not found the expected number of times stops the check: it cannot rot
 silently when the code changes), and runs a fast subset of the tests against the copy
-(``PYTHONPATH`` = the copy, a fresh ``NUMBA_CACHE_DIR`` per variant: numba checks only a
+(``PYTHONPATH`` = the copy, its own ``NUMBA_CACHE_DIR`` per variant: numba checks only a
 compiled function's own file for changes, so a shared cache would hand one variant
-another's machine code). The subprocess reports which ``camdyn`` it imported; a run that
-imported anything but its copy is an error.
+another's machine code). The unmutated copy compiles first; each mutant's cache then
+starts as a copy of its cache without the entries of the mutated module and of every
+module that imports it, directly or not (found from the copy's import statements), so
+that only code that can see the mistake is compiled again. A stale entry could only hide
+a mistake (a survivor, which fails the check), never fake a kill. The subprocess reports
+which ``camdyn`` it imported; a run that imported anything but its copy is an error.
 
 The unmutated copy must pass the subset and every mutant must fail it. The script
 prints a table (mutant, tests failed, time, verdict) and exits with status 1 if any
@@ -21,11 +25,14 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import ast
+import hashlib
 import os
 import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import xml.etree.ElementTree as ET
 from concurrent.futures import ThreadPoolExecutor
@@ -58,24 +65,9 @@ class Mutant:
 
 OUT = "camdyn/model/outputs.py"
 DYN = "camdyn/model/dynamics.py"
+#: The mutants, those of modules that the integrator compiles first (they compile from
+#: nothing, or nearly), then those of outputs.py (their caches start from the unmutated one).
 MUTANTS = [
-    Mutant("inertia dropped from the pivot reaction and its inverse", OUT, (
-        ("nx = m * agx + fn * sa", "nx = fn * sa", 1),
-        ("ny = m * agy + fn * ca", "ny = fn * ca", 1),
-        ("a = nx[i] - m * agx + fs * st", "a = nx[i] + fs * st", 1),
-        ("b = ny[i] - m * agy + fs * ct", "b = ny[i] + fs * ct", 1),
-    )),
-    Mutant("centripetal term dropped from the pivot reaction and its inverse", OUT, (
-        ("(alpha_ddot * sa + alpha_dot * alpha_dot * ca)", "(alpha_ddot * sa)", 1),
-        ("(alpha_ddot * ca - alpha_dot * alpha_dot * sa)", "(alpha_ddot * ca)", 1),
-        ("(alpha_ddot[i] * sa + ad2 * ca)", "(alpha_ddot[i] * sa)", 1),
-        ("(alpha_ddot[i] * ca - ad2 * sa)", "(alpha_ddot[i] * ca)", 1),
-    )),
-    Mutant("friction sign flipped in the pivot reaction and its inverse", OUT, (
-        ("+ fn * sa - ff * ca - fs * st", "+ fn * sa + ff * ca - fs * st", 1),
-        ("+ fn * ca + ff * sa - fs * ct", "+ fn * ca - ff * sa - fs * ct", 1),
-        ("ff[i] = -a * ca + b * sa", "ff[i] = a * ca - b * sa", 1),
-    )),
     Mutant("friction moment sign flipped in the equation of motion", DYN, (
         ("moment += fn * chi + ff * p[L.OFFSET]", "moment += fn * chi - ff * p[L.OFFSET]", 2),
     )),
@@ -95,6 +87,23 @@ MUTANTS = [
     )),
     Mutant("adhesion clipping ignored", "camdyn/model/contact.py", (
         ("p[L.V_REFERENCE], p[L.CLIP] > 0.5)", "p[L.V_REFERENCE], p[L.CLIP] > 1.5)", 1),
+    )),
+    Mutant("inertia dropped from the pivot reaction and its inverse", OUT, (
+        ("nx = m * agx + fn * sa", "nx = fn * sa", 1),
+        ("ny = m * agy + fn * ca", "ny = fn * ca", 1),
+        ("a = nx[i] - m * agx + fs * st", "a = nx[i] + fs * st", 1),
+        ("b = ny[i] - m * agy + fs * ct", "b = ny[i] + fs * ct", 1),
+    )),
+    Mutant("centripetal term dropped from the pivot reaction and its inverse", OUT, (
+        ("(alpha_ddot * sa + alpha_dot * alpha_dot * ca)", "(alpha_ddot * sa)", 1),
+        ("(alpha_ddot * ca - alpha_dot * alpha_dot * sa)", "(alpha_ddot * ca)", 1),
+        ("(alpha_ddot[i] * sa + ad2 * ca)", "(alpha_ddot[i] * sa)", 1),
+        ("(alpha_ddot[i] * ca - ad2 * sa)", "(alpha_ddot[i] * ca)", 1),
+    )),
+    Mutant("friction sign flipped in the pivot reaction and its inverse", OUT, (
+        ("+ fn * sa - ff * ca - fs * st", "+ fn * sa + ff * ca - fs * st", 1),
+        ("+ fn * ca + ff * sa - fs * ct", "+ fn * ca - ff * sa - fs * ct", 1),
+        ("ff[i] = -a * ca + b * sa", "ff[i] = a * ca - b * sa", 1),
     )),
 ]
 
@@ -131,13 +140,70 @@ def make_copy(work: Path, mutant: Mutant | None) -> Path:
     return dest
 
 
-def run_variant(mutant: Mutant | None, keep: bool) -> dict:
-    """Copy, mutate, run the subset; returns name, counts, seconds and the output tail."""
+def importers(src: Path, target: str) -> set[str]:
+    """The files (relative to ``src``) of ``target`` and of every module under ``src``
+    that imports it, directly or through others."""
+    modules = {f.relative_to(src).with_suffix("").as_posix().replace("/", "."): f.relative_to(src).as_posix()
+               for f in src.rglob("*.py")}
+    modules.update({name.removesuffix(".__init__"): path for name, path in list(modules.items())
+                    if name.endswith(".__init__")})
+    imports: dict[str, set[str]] = {}
+    for path in set(modules.values()):
+        found = set()
+        for node in ast.walk(ast.parse((src / path).read_text())):
+            if isinstance(node, ast.Import):
+                found.update(alias.name for alias in node.names)
+            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                found.add(node.module)
+                found.update(f"{node.module}.{alias.name}" for alias in node.names)
+        imports[path] = {modules[m] for m in found if m in modules}
+    stale = {target}
+    while True:
+        more = {path for path, used in imports.items() if used & stale} - stale
+        if not more:
+            return stale
+        stale |= more
+
+
+def cache_folder(src: Path, package: str) -> str:
+    """The sub-folder numba's ``NUMBA_CACHE_DIR`` gives the files of ``src/package``
+    (``numba.core.caching``: the folder's name and the SHA-1 of its absolute path)."""
+    folder = os.path.abspath(src / package)
+    return "_".join([os.path.split(folder)[-1], hashlib.sha1(folder.encode()).hexdigest()])
+
+
+def seed_cache(seed: tuple[Path, Path], src: Path, cache: Path, mutant: Mutant) -> int:
+    """Copy the unmutated copy's cache (``seed`` = its src and cache) into ``cache`` for
+    the copy ``src``, leaving out the entries of the modules that can see the mutant;
+    returns the number of entries copied."""
+    seed_src, seed_cache_dir = seed
+    stale = importers(src, mutant.path)
+    copied = 0
+    for package in sorted({Path(f).parent.as_posix() for f in (p.relative_to(src).as_posix()
+                                                               for p in src.rglob("*.py"))}):
+        old = seed_cache_dir / cache_folder(seed_src, package)
+        if not old.is_dir():
+            continue
+        fresh = {Path(f).stem for f in stale if Path(f).parent.as_posix() == package}
+        new = cache / cache_folder(src, package)
+        new.mkdir(parents=True, exist_ok=True)
+        for entry in old.iterdir():
+            if entry.name.split(".")[0] not in fresh:
+                shutil.copy2(entry, new / entry.name)
+                copied += 1
+    return copied
+
+
+def run_variant(mutant: Mutant | None, keep: bool, seed: tuple[Path, Path] | None = None) -> dict:
+    """Copy, mutate, run the subset (a mutant's cache seeded from ``seed``, the unmutated
+    copy's src and cache, when given); returns name, counts, seconds and the output tail."""
     name = "(unmutated)" if mutant is None else mutant.name
     work = Path(tempfile.mkdtemp(prefix="camdyn-mutant-"))
     start = time.perf_counter()
     try:
         src = make_copy(work, mutant)
+        if seed is not None and mutant is not None:
+            seed_cache(seed, src, work / "numba-cache", mutant)
         env = dict(os.environ, PYTHONPATH=str(src), NUMBA_CACHE_DIR=str(work / "numba-cache"),
                    PYTHONDONTWRITEBYTECODE="1")
         report = work / "report.xml"
@@ -158,11 +224,12 @@ def run_variant(mutant: Mutant | None, keep: bool) -> dict:
         if counts["tests"] == 0:
             raise SetupError(f"{name}: no tests ran\n{out[-3000:]}")
         row = {"name": name, "mutant": mutant is not None, "rc": proc.returncode, **counts, "failed": failed,
-               "seconds": time.perf_counter() - start, "tail": out[-2000:], "camdyn": imported[0]}
+               "seconds": time.perf_counter() - start, "tail": out[-2000:], "camdyn": imported[0],
+               "work": work}
         print(f"  {verdict(row):8s} {row['seconds']:4.0f} s  {name}", flush=True)
         return row
     finally:
-        if not keep:
+        if not keep and mutant is not None:
             shutil.rmtree(work, ignore_errors=True)
 
 
@@ -188,8 +255,30 @@ def main(argv=None) -> int:
             make_copy(Path(tmp), m)
     variants = [None, *mutants]
     print(f"{len(variants)} variants x {len(TESTS)} test selections, {args.jobs} at a time", flush=True)
-    with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        rows = list(pool.map(lambda m: run_variant(m, args.keep), variants))
+    # the unmutated copy and the first mutant compile from nothing; the others wait for the
+    # unmutated cache and start from it
+    unmutated_done = threading.Event()
+    seed: list = []
+
+    def run(index_and_mutant):
+        index, mutant = index_and_mutant
+        if mutant is None:
+            try:
+                row = run_variant(None, True)
+                seed.append((row["work"] / "src", row["work"] / "numba-cache"))
+                return row
+            finally:
+                unmutated_done.set()
+        if index > 1:
+            unmutated_done.wait()
+        return run_variant(mutant, args.keep, seed[0] if seed else None)
+
+    try:
+        with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+            rows = list(pool.map(run, enumerate(variants)))
+    finally:
+        if seed and not args.keep:
+            shutil.rmtree(seed[0][0].parent, ignore_errors=True)
     width = max(len(r["name"]) for r in rows)
     print(f"\n{'mutant':<{width}}  {'tests failed':>12}  {'time':>6}  verdict   first failures")
     for r in rows:
