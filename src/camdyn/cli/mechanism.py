@@ -11,7 +11,7 @@ import numpy as np
 from rich.table import Table
 
 from camdyn.cli.common import console
-from camdyn.cli.outputs import announce, emit_json
+from camdyn.cli.outputs import report_run
 from camdyn.errors import ParameterError
 from camdyn.params.config import parse_assignments
 from camdyn.params.units import parse_quantity, parse_speed
@@ -117,16 +117,7 @@ def simulate_mechanism_command(source: str, assignments, speed: str | None, revo
     ds = simulate_mechanism(mechanism, revolutions=revolutions, sample_rate=fs,
                             rtol=DEFAULT_RTOL if rtol is None else rtol, method=method)
     summary = mechanism_summary(ds)
-    if not json_out:
-        _print(summary)
-    files = []
-    if out is not None:
-        from camdyn.io.netcdf import save_netcdf
-        save_netcdf(ds, out)
-        files.append(announce(out, json_out))
-    if json_out:
-        emit_json("simulate-mechanism", {k: v for k, v in summary.items() if k != "solver"},
-                  solver=summary["solver"], files=files)
+    report_run(ds, summary, "simulate-mechanism", _print, out, json_out)
 
 
 def show_mechanism(source: str) -> str:

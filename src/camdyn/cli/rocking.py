@@ -10,7 +10,7 @@ import numpy as np
 from rich.table import Table
 
 from camdyn.cli.common import console
-from camdyn.cli.outputs import announce, emit_json
+from camdyn.cli.outputs import report_run
 from camdyn.cli.translating import DEFAULT_RTOL, add_run_rows, run_span
 from camdyn.errors import ParameterError
 from camdyn.params.config import parse_assignments
@@ -84,13 +84,4 @@ def simulate_rocking_command(source: str, assignments, speed: str | None, revolu
                           rtol=DEFAULT_RTOL if rtol is None else rtol)
     ds.attrs["name"] = spec.name
     summary = rocking_summary(ds, follower, spec.name)
-    if not json_out:
-        _print(summary)
-    files = []
-    if out is not None:
-        from camdyn.io.netcdf import save_netcdf
-        save_netcdf(ds, out)
-        files.append(announce(out, json_out))
-    if json_out:
-        emit_json("simulate-rocking", {k: v for k, v in summary.items() if k != "solver"},
-                  solver=summary["solver"], files=files)
+    report_run(ds, summary, "simulate-rocking", _print, out, json_out)

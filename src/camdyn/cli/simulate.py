@@ -10,7 +10,7 @@ import typer
 from rich.table import Table
 
 from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, load_source
-from camdyn.cli.outputs import announce, check_outputs, emit_json
+from camdyn.cli.outputs import check_outputs, emit_json, report_run
 from camdyn.errors import ParameterError
 from camdyn.params.config import (
     SCHEMA,
@@ -194,20 +194,10 @@ def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         speed = parse_speed(speed, "--speed")
     ds = run(system, speed=speed, revolutions=revolutions, sample_rate=fs, method=method, rtol=rtol)
     summary = _summary(ds)
-    if not json_out:
-        _print_summary(summary)
-    files = []
-    if out is not None:
-        from camdyn.io.netcdf import save_netcdf
-        save_netcdf(ds, out)
-        files.append(announce(out, json_out))
+    draw = None
     if plot is not None:
-        from camdyn.plotting import plot_time_history
-        plot_time_history(ds, plot)
-        files.append(announce(plot, json_out))
-    if json_out:
-        emit_json("simulate", {k: v for k, v in summary.items() if k not in _DETAILS},
-                  last_impact=summary["last_impact"], solver=summary["solver"], files=files)
+        from camdyn.plotting import plot_time_history as draw
+    report_run(ds, summary, "simulate", _print_summary, out, json_out, plot, draw, _DETAILS)
 
 
 def demo(out: Path = typer.Option(Path("out"), help="Folder for the figures and results (about 80 MB)."),

@@ -10,7 +10,7 @@ import numpy as np
 from rich.table import Table
 
 from camdyn.cli.common import console
-from camdyn.cli.outputs import announce, emit_json
+from camdyn.cli.outputs import announce, emit_json, report_run
 from camdyn.errors import ParameterError
 from camdyn.params.config import parse_assignments
 from camdyn.params.units import parse_quantity, parse_speed
@@ -133,20 +133,10 @@ def simulate_translating_command(source: str, assignments, speed: str | None, re
     summary = translating_summary(ds, follower)
     if friction is not None:
         summary.update(friction_summary(ds))
-    if not json_out:
-        _print(summary)
-    files = []
-    if out is not None:
-        from camdyn.io.netcdf import save_netcdf
-        save_netcdf(ds, out)
-        files.append(announce(out, json_out))
+    draw = None
     if plot is not None:
-        from camdyn.plotting.translating import plot_translating_history
-        plot_translating_history(ds, plot)
-        files.append(announce(plot, json_out))
-    if json_out:
-        emit_json("simulate-translating", {k: v for k, v in summary.items() if k != "solver"},
-                  solver=summary["solver"], files=files)
+        from camdyn.plotting.translating import plot_translating_history as draw
+    report_run(ds, summary, "simulate-translating", _print, out, json_out, plot, draw)
 
 
 def bifurcation_translating_command(source: str, assignments, speeds: str, revolutions: int, discard: int,

@@ -10,7 +10,6 @@ roller's spin inertia.
 from __future__ import annotations
 
 import math
-import time as _time
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,7 +21,7 @@ from camdyn.model import sliding_follower as model
 from camdyn.model import translating_follower as base
 from camdyn.model.profiles import pressure_angle
 from camdyn.simulation import limits
-from camdyn.simulation.translating import TranslatingFollower, leaves_at_joint
+from camdyn.simulation.translating import TranslatingFollower, check_run_arguments, leaves_at_joint, run_follower
 from camdyn.systems import registry as systems
 
 __all__ = ["FollowerFriction", "simulate_sliding", "jamming_margin", "friction_from_spec"]
@@ -156,11 +155,7 @@ def simulate_sliding(follower, friction, speed, duration, sample_rate=10e3, phas
     if not isinstance(friction, FollowerFriction):
         raise ParameterError(f"expected a FollowerFriction, got {type(friction).__name__}")
     friction.check(follower)
-    for name, value, unit in (("speed", speed, "rad/s"), ("duration", duration, "s"),
-                              ("sample_rate", sample_rate, "Hz"), ("rtol", rtol, ""), ("atol", atol, "m")):
-        limits.check_number(name, value, unit)
-        if not (math.isfinite(value) and value > 0.0):
-            raise ParameterError(f"{name} must be positive and finite, got {value!r} {unit}".rstrip())
+    check_run_arguments(speed, duration, sample_rate, rtol, atol)
     if not math.isfinite(limits.check_number("phase", phase, "rad")):
         raise ParameterError(f"phase must be finite, got {phase!r} rad")
     period = 2.0 * math.pi / speed
@@ -169,20 +164,9 @@ def simulate_sliding(follower, friction, speed, duration, sample_rate=10e3, phas
     p = model.pack(follower.pack(float(speed), float(phase)), friction.static, friction.kinetic,
                    friction.roller_inertia)
     y0 = _initial_state(follower, p, initial_state)
-    max_step = period / 64.0 if max_step is None else max_step
-    max_events = int(1000 + 64 * duration / period) if max_events is None else max_events
-    if not (isinstance(max_step, (int, float)) and math.isfinite(max_step) and max_step > 0.0):
-        raise ParameterError(f"max_step must be a positive number of seconds, got {max_step!r}")
-    for name, value in (("max_events", max_events), ("max_steps", max_steps)):
-        if isinstance(value, bool) or not (isinstance(value, (int, np.integer)) and value > 0):
-            raise ParameterError(f"{name} must be a positive whole number, got {value!r}")
-    t_out = np.minimum(np.arange(n_out) / sample_rate, duration)
-    start = _time.perf_counter()
-    y, modes, events, counters = driver.integrate(systems.SLIDING_FOLLOWER, p, y0, 0.0, float(duration), t_out,
-                                                  float(rtol), float(atol), float(max_step), driver.METHOD_AUTO,
-                                                  int(max_steps), int(max_events), True)
-    elapsed = _time.perf_counter() - start
-    limits.check_run(counters, "simulation")
+    t_out, y, modes, events, counters, elapsed = run_follower(
+        systems.SLIDING_FOLLOWER, p, y0, duration, sample_rate, n_out, period, rtol, atol, max_step, max_events,
+        max_steps)
     ds = _dataset(p, t_out, y, modes, events)
     ds.attrs.update({"title": "camdyn translating follower with friction", "citation": follower.citation,
                      "speed_rad_s": float(speed), "phase_rad": float(phase), "mass_kg": follower.mass,

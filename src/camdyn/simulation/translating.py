@@ -272,7 +272,9 @@ def liftoff_speed(follower, samples=200_000):
     return float(np.min(roots))
 
 
-def _check_run(speed, duration, sample_rate, rtol, atol):
+def check_run_arguments(speed, duration, sample_rate, rtol, atol):
+    """Refuse a speed [rad/s], duration [s], sample rate [Hz] or tolerances (``atol`` [m])
+    that are not positive and finite, or tolerances outside 1e-14 to 1e-2."""
     for name, value, unit in (("speed", speed, "rad/s"), ("duration", duration, "s"),
                               ("sample_rate", sample_rate, "Hz"), ("rtol", rtol, ""), ("atol", atol, "m")):
         limits.check_number(name, value, unit)
@@ -323,7 +325,7 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
     """
     if not isinstance(follower, TranslatingFollower):
         raise ParameterError(f"expected a TranslatingFollower, got {type(follower).__name__}")
-    _check_run(speed, duration, sample_rate, rtol, atol)
+    check_run_arguments(speed, duration, sample_rate, rtol, atol)
     if not math.isfinite(limits.check_number("phase", phase, "rad")):
         raise ParameterError(f"phase must be finite, got {phase!r} rad")
     period = 2.0 * math.pi / speed
@@ -341,24 +343,35 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
         if y0[0] < model.cam(0.0, p)[1] - 1e-12 * max(1.0, abs(y0[0])) and follower.contact == "rigid":
             raise ParameterError(f"the follower starts inside the cam (x = {y0[0]} m below the lift "
                                  f"{model.cam(0.0, p)[1]} m); a rigid contact allows no penetration")
-    if max_step is None:
-        max_step = period / 64.0
-    if max_events is None:
-        max_events = int(1000 + 64 * duration / period)
+    t_out, y, modes, events, counters, elapsed = run_follower(
+        systems.TRANSLATING_FOLLOWER, p, y0, duration, sample_rate, n_out, period, rtol, atol, max_step, max_events,
+        max_steps)
+    return _dataset(follower, p, t_out, y, modes, events, counters, elapsed, speed, phase, rtol, atol)
+
+
+def run_follower(system_id, p, y0, duration, sample_rate, n_out, period, rtol, atol, max_step, max_events,
+                 max_steps):
+    """Run a follower model ``system_id`` from ``y0`` over ``duration`` [s], sampled at
+    ``n_out`` times ``sample_rate`` [Hz] apart, with the limits of
+    :func:`simulate_translating` (``max_step`` [s] default ``period / 64``, ``max_events``
+    default 64 a revolution plus 1000), refused before the run when meaningless.
+
+    Returns ``(t_out [s], y, modes, events, counters, elapsed [s])``."""
+    max_step = period / 64.0 if max_step is None else max_step
+    max_events = int(1000 + 64 * duration / period) if max_events is None else max_events
     if not (isinstance(max_step, (int, float)) and math.isfinite(max_step) and max_step > 0.0):
         raise ParameterError(f"max_step must be a positive number of seconds, got {max_step!r}")
-    if not (isinstance(max_events, (int, np.integer)) and max_events > 0):
-        raise ParameterError(f"max_events must be a positive whole number, got {max_events!r}")
-    if isinstance(max_steps, bool) or not (isinstance(max_steps, (int, np.integer)) and max_steps > 0):
-        raise ParameterError(f"max_steps must be a positive whole number, got {max_steps!r}")
+    for name, value in (("max_events", max_events), ("max_steps", max_steps)):
+        if isinstance(value, bool) or not (isinstance(value, (int, np.integer)) and value > 0):
+            raise ParameterError(f"{name} must be a positive whole number, got {value!r}")
     t_out = np.minimum(np.arange(n_out) / sample_rate, duration)
     start = _time.perf_counter()
-    y, modes, events, counters = driver.integrate(systems.TRANSLATING_FOLLOWER, p, y0, 0.0, float(duration), t_out,
-                                                  float(rtol), float(atol), float(max_step), driver.METHOD_AUTO,
-                                                  int(max_steps), int(max_events), True)
+    y, modes, events, counters = driver.integrate(system_id, p, y0, 0.0, float(duration), t_out, float(rtol),
+                                                  float(atol), float(max_step), driver.METHOD_AUTO, int(max_steps),
+                                                  int(max_events), True)
     elapsed = _time.perf_counter() - start
     limits.check_run(counters, "simulation")
-    return _dataset(follower, p, t_out, y, modes, events, counters, elapsed, speed, phase, rtol, atol)
+    return t_out, y, modes, events, counters, elapsed
 
 
 def leaves_at_joint(t, p):
