@@ -82,6 +82,22 @@ def flatten(table: dict, prefix: str = "") -> dict:
     return out
 
 
+def read_toml_file(source: str | Path) -> dict:
+    """The flattened tables (:func:`flatten`) of the TOML file ``source``, or a
+    :class:`PresetError` that says why it cannot be read."""
+    path = Path(str(source))
+    try:
+        return flatten(tomllib.loads(path.read_text(encoding="utf-8")))
+    except FileNotFoundError:
+        raise PresetError(f"configuration file {str(source)!r} does not exist") from None
+    except OSError as exc:
+        raise PresetError(f"{source}: cannot be read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise PresetError(f"{source}: not UTF-8 text; a configuration file is TOML, saved as UTF-8") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise PresetError(f"{source}: not valid TOML ({exc})") from None
+
+
 def unknown_key_error(key: str) -> UnknownKeyError:
     """The error for a dotted ``key`` that is not in :data:`SCHEMA`, suggesting close keys."""
     close = difflib.get_close_matches(key, list(SCHEMA), n=3)

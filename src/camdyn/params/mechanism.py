@@ -41,8 +41,8 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyError
-from camdyn.params.config import flatten
+from camdyn.errors import ParameterError, UnitError, UnknownKeyError
+from camdyn.params.config import read_toml_file
 from camdyn.params.units import parse_quantity, parse_speed
 
 __all__ = ["KINDS", "DRIVE_KINDS", "SCHEMA", "MechanismSpec", "read_mechanism", "mechanism_spec_from_table",
@@ -289,17 +289,7 @@ def mechanism_spec_from_table(flat: dict, name: str = "custom", folder: Path | N
 
 def _table(source: str | Path) -> dict:
     """The flattened TOML of a mechanism file, or a :class:`PresetError`."""
-    path = Path(str(source))
-    try:
-        return flatten(tomllib.loads(path.read_text(encoding="utf-8")))
-    except FileNotFoundError:
-        raise PresetError(f"configuration file {str(source)!r} does not exist") from None
-    except OSError as exc:
-        raise PresetError(f"{source}: cannot be read ({exc.strerror or exc})") from None
-    except UnicodeDecodeError:
-        raise PresetError(f"{source}: not UTF-8 text; a configuration file is TOML, saved as UTF-8") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise PresetError(f"{source}: not valid TOML ({exc})") from None
+    return read_toml_file(source)
 
 
 def read_mechanism(source: str | Path, overrides: dict | None = None) -> MechanismSpec:

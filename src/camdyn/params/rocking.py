@@ -37,11 +37,11 @@ from __future__ import annotations
 
 import difflib
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyError
+from camdyn.errors import ParameterError, UnitError, UnknownKeyError
+from camdyn.params.config import read_toml_file
 from camdyn.params.profile_table import profile_spec
 from camdyn.params.profiles import HERTZ_DAMPING_LAWS, HERTZ_KEYS, TranslatingSpec
 from camdyn.params.units import parse_quantity
@@ -236,16 +236,6 @@ def _check_contact(flat: dict, v: dict) -> None:
         raise ParameterError(f"contact.restitution must be between 0 and 1, got {v['contact.restitution']!r}")
 
 
-def _flatten(table: dict, prefix: str = "") -> dict:
-    out = {}
-    for key, value in table.items():
-        if isinstance(value, dict):
-            out.update(_flatten(value, f"{prefix}{key}."))
-        else:
-            out[f"{prefix}{key}"] = value
-    return out
-
-
 def read_rocking(source: str | Path, overrides: dict | None = None) -> RockingSpec:
     """Read a rocking-follower TOML file, with dotted-key overrides.
 
@@ -261,15 +251,7 @@ def read_rocking(source: str | Path, overrides: dict | None = None) -> RockingSp
     RockingSpec
     """
     path = Path(str(source))
-    try:
-        table = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise PresetError(f"{source}: cannot be read ({exc.strerror or exc})") from None
-    except UnicodeDecodeError:
-        raise PresetError(f"{source}: not UTF-8 text; a configuration file is TOML, saved as UTF-8") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise PresetError(f"{source}: not valid TOML ({exc})") from None
-    flat = _flatten(table)
+    flat = read_toml_file(source)
     flat.update(overrides or {})
     return rocking_spec_from_table(flat, name=str(flat.get("preset.name", path.stem)),
                                    citation=str(flat.get("preset.citation", "")), folder=path.resolve().parent)
