@@ -15,30 +15,13 @@ import pytest
 from scipy.linalg import expm
 from scipy.optimize import brentq, fsolve
 
+# the rigid-impact oscillator's closed form, from the single-shooting tests
+from test_continuation import FORCE, HOMOGENEOUS, RESTITUTION, W_NATURAL, ZETA, _free, _impact_orbit, _saltation
+
 from camdyn.continuation import continue_orbits, find_orbit, model_problem
 from camdyn.continuation.multiple import continuity, cyclic_jacobian, monodromy, newton_step
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.systems import registry as systems
-
-NATURAL, ZETA, FORCE, RESTITUTION = 1.0, 0.05, 1.0, 0.8     # w [rad/s], zeta [-], A [m/s^2], r [-]
-HOMOGENEOUS = np.array([[0.0, 1.0], [-NATURAL ** 2, -2 * ZETA * NATURAL]])
-
-
-def _free(forcing, t_leave, x0, v0, s):
-    """Position [m] and velocity [m/s] a time s [s] after leaving (x0, v0) at t_leave [s]."""
-    w, z = NATURAL, ZETA
-    amplitude = FORCE / math.hypot(w * w - forcing * forcing, 2 * z * w * forcing)
-    phase = math.atan2(2 * z * w * forcing, w * w - forcing * forcing)
-
-    def steady(t):
-        return (amplitude * math.cos(forcing * t - phase), -amplitude * forcing * math.sin(forcing * t - phase))
-    wd = w * math.sqrt(1 - z * z)
-    (xp, vp), (xs, vs) = steady(t_leave), steady(t_leave + s)
-    c1 = x0 - xp
-    c2 = (v0 - vp + z * w * c1) / wd
-    decay, cos, sin = math.exp(-z * w * s), math.cos(wd * s), math.sin(wd * s)
-    return (xs + decay * (c1 * cos + c2 * sin),
-            vs + decay * (-z * w * (c1 * cos + c2 * sin) + wd * (c2 * cos - c1 * sin)))
 
 
 class ImpactOrbit:
@@ -59,13 +42,7 @@ class ImpactOrbit:
 
     def monodromy(self):
         """Saltation of the impact times the free flow over one period, at the impact."""
-        v_minus = -self.v / RESTITUTION
-        accel = FORCE * math.cos(self.forcing * self.t_impact) - NATURAL ** 2 * self.sigma
-        f_minus = np.array([v_minus, accel - 2 * ZETA * NATURAL * v_minus])
-        f_plus = np.array([self.v, accel - 2 * ZETA * NATURAL * self.v])
-        reset, normal = np.diag([1.0, -RESTITUTION]), np.array([-1.0, 0.0])      # guard sigma - x
-        saltation = reset + np.outer(f_plus - reset @ f_minus, normal) / (normal @ f_minus)
-        return saltation @ expm(HOMOGENEOUS * self.period)
+        return _saltation(self.forcing, self.sigma, self.t_impact, self.v) @ expm(HOMOGENEOUS * self.period)
 
     def multipliers(self, periods=1):
         values = np.linalg.eigvals(np.linalg.matrix_power(self.monodromy(), periods))
@@ -75,14 +52,7 @@ class ImpactOrbit:
 def _solve(forcing, sigma, guess):
     """The orbit with the given forcing W [rad/s] and wall sigma [m], from a guess of
     (t_impact, v)."""
-    period = 2 * math.pi / forcing
-
-    def residual(u):
-        x, v = _free(forcing, u[0], sigma, u[1], period)
-        return [x - sigma, v + u[1] / RESTITUTION]
-    solution = fsolve(residual, guess, xtol=1e-14)
-    assert np.max(np.abs(residual(solution))) < 1e-12 and solution[1] < 0
-    return ImpactOrbit(forcing, sigma, *solution)
+    return ImpactOrbit(forcing, sigma, *_impact_orbit(forcing, sigma, guess))
 
 
 def _unstable(v):
@@ -99,7 +69,7 @@ def _unstable(v):
 
 
 def _problem(orbit, t_start=0.0):
-    return model_problem(systems.RIGID_IMPACT, [NATURAL, ZETA, FORCE, orbit.forcing, orbit.sigma, RESTITUTION],
+    return model_problem(systems.RIGID_IMPACT, [W_NATURAL, ZETA, FORCE, orbit.forcing, orbit.sigma, RESTITUTION],
                          [orbit.sigma - 1.0, 0.0, 0.0], t_start=t_start)
 
 
