@@ -138,6 +138,24 @@ def test_interrupted_sweep_stops_its_workers_and_resumes_to_the_uninterrupted_re
         np.testing.assert_array_equal(result[name].values, reference[name].values, err_msg=name)
 
 
+@pytest.mark.parametrize("quiet", [False, True])
+def test_the_resource_tracker_of_a_sweep_keeps_standard_error_clean(quiet):
+    # A lock the tracker still lists but which is gone: what it finds after an interrupt
+    # terminated the workers. Without the filter it writes two warnings to stderr (the
+    # control case), which broke the interrupt's one line.
+    code = ("from camdyn.sweeps.execution import quiet_resource_tracker\n"
+            f"if {quiet}: quiet_resource_tracker()\n"
+            "from multiprocessing import resource_tracker\n"
+            "resource_tracker.register('/camdyn-test-gone', 'semaphore')\n")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONWARNINGS"}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, env=env)
+    assert done.returncode == 0, done.stderr
+    if quiet:
+        assert done.stderr == ""
+    else:
+        assert "resource_tracker" in done.stderr and "camdyn-test-gone" in done.stderr
+
+
 @pytest.mark.slow
 def test_sigkill_of_a_sweep_leaves_no_worker_behind(tmp_path):
     (tmp_path / "a.toml").write_text(SWEEP_TOML.format(num=40, revolutions=400, name="a"))

@@ -54,7 +54,8 @@ from camdyn.sweeps import worker
 from camdyn.sweeps.spec import SweepSpec
 from camdyn.sweeps.store import Checkpoint
 
-__all__ = ["check_dask_address", "compute_chunk", "prepare_chunk", "run_sweep", "default_workers", "QUIET_DASK"]
+__all__ = ["check_dask_address", "quiet_resource_tracker", "compute_chunk", "prepare_chunk", "run_sweep",
+           "default_workers", "QUIET_DASK"]
 
 STATUS_OK, STATUS_REFUSED, STATUS_SOLVER = 0, 1, 2
 MAX_STEPS_PER_REVOLUTION = 200_000
@@ -170,9 +171,30 @@ def _warm_point(base):
     return base.p, base.y0, base.system.motion.period
 
 
+#: The warnings filter that keeps multiprocessing's resource tracker quiet.
+QUIET_TRACKER = "ignore::UserWarning:multiprocessing.resource_tracker"
+
+
+def quiet_resource_tracker() -> None:
+    """Keep the resource tracker process, which multiprocessing starts for the worker
+    pools, from writing to this process's standard error.
+
+    When an interrupt terminates the workers, the tracker may find a lock it still lists
+    but which is already gone, and warns about it (two ``UserWarning`` lines with
+    tracebacks) after camdyn has printed its one line. The tracker is a separate Python
+    process that reads ``PYTHONWARNINGS`` when it starts, so the filter is added there
+    before the first pool starts it; other warnings are untouched.
+    """
+    current = os.environ.get("PYTHONWARNINGS", "")
+    if QUIET_TRACKER not in current.split(","):
+        os.environ["PYTHONWARNINGS"] = f"{current},{QUIET_TRACKER}" if current else QUIET_TRACKER
+
+
 @contextlib.contextmanager
 def _executor(workers: int, dask: str | None, threads: int, point):
     """Yield ``(executor or None, number of workers, description)``."""
+    if workers != 0 or dask is not None:
+        quiet_resource_tracker()
     if dask is None:
         if workers == 0:
             yield None, 1, f"inline, {threads} thread(s)"
