@@ -6,7 +6,8 @@ text is not found the expected number of times stops the check: it cannot rot
 silently when the code changes), and runs a fast subset of the tests against the copy
 (``PYTHONPATH`` = the copy, its own ``NUMBA_CACHE_DIR`` per variant: numba checks only a
 compiled function's own file for changes, so a shared cache would hand one variant
-another's machine code). The unmutated copy compiles first; each mutant's cache then
+another's machine code). The unmutated copy starts from the checkout's own cache (what
+the test suite compiled, where its sources are unchanged); each mutant's cache then
 starts as a copy of its cache without the entries of the mutated module and of every
 module that imports it, directly or not (found from the copy's import statements), so
 that only code that can see the mistake is compiled again. A stale entry could only hide
@@ -194,6 +195,25 @@ def seed_cache(seed: tuple[Path, Path], src: Path, cache: Path, mutant: Mutant) 
     return copied
 
 
+def seed_from_checkout(src: Path, cache: Path) -> int:
+    """Copy the checkout's own numba cache (``src/**/__pycache__``, written by the test
+    suite, which runs first in CI) into ``cache`` for the unmutated copy ``src``; returns
+    the number of entries copied. numba keeps an entry only where the copied source file's
+    time stamp and size match it, and the copy keeps the time stamps."""
+    copied = 0
+    for folder in (ROOT / "src").rglob("__pycache__"):
+        package = folder.parent.relative_to(ROOT / "src").as_posix()
+        entries = [e for e in folder.iterdir() if e.suffix in (".nbi", ".nbc")]
+        if not entries:
+            continue
+        new = cache / cache_folder(src, package)
+        new.mkdir(parents=True, exist_ok=True)
+        for entry in entries:
+            shutil.copy2(entry, new / entry.name)
+            copied += 1
+    return copied
+
+
 def run_variant(mutant: Mutant | None, keep: bool, seed: tuple[Path, Path] | None = None) -> dict:
     """Copy, mutate, run the subset (a mutant's cache seeded from ``seed``, the unmutated
     copy's src and cache, when given); returns name, counts, seconds and the output tail."""
@@ -204,6 +224,8 @@ def run_variant(mutant: Mutant | None, keep: bool, seed: tuple[Path, Path] | Non
         src = make_copy(work, mutant)
         if seed is not None and mutant is not None:
             seed_cache(seed, src, work / "numba-cache", mutant)
+        elif mutant is None:
+            seed_from_checkout(src, work / "numba-cache")
         env = dict(os.environ, PYTHONPATH=str(src), NUMBA_CACHE_DIR=str(work / "numba-cache"),
                    PYTHONDONTWRITEBYTECODE="1")
         report = work / "report.xml"
@@ -255,8 +277,10 @@ def main(argv=None) -> int:
             make_copy(Path(tmp), m)
     variants = [None, *mutants]
     print(f"{len(variants)} variants x {len(TESTS)} test selections, {args.jobs} at a time", flush=True)
-    # the unmutated copy and the first mutant compile from nothing; the others wait for the
-    # unmutated cache and start from it
+    # the mutants start from the unmutated copy's cache, so they wait for it; where the
+    # checkout has no compiled cache (no test run yet) the unmutated copy compiles from
+    # nothing, and the first mutant compiles beside it rather than wait
+    warm = any((ROOT / "src").rglob("__pycache__/*.nbi"))
     unmutated_done = threading.Event()
     seed: list = []
 
@@ -269,7 +293,7 @@ def main(argv=None) -> int:
                 return row
             finally:
                 unmutated_done.set()
-        if index > 1:
+        if index > 1 or warm:
             unmutated_done.wait()
         return run_variant(mutant, args.keep, seed[0] if seed else None)
 
