@@ -208,3 +208,43 @@ def test_presets_show_reads_back(tmp_path, name, assignments):
     assert again.spec.initial_speed == first.spec.initial_speed
     if assignments:
         assert first.second.spring.stiffness == 3200.0 and first.spec.initial_speed == 70.0
+
+
+@pytest.mark.parametrize("example, labels", [
+    ("drum_brake.toml", ["rad/s", "deg", "$F_n$ [N]", "$F_f$ [N]"]),
+    ("flexible_pivot.toml", ["deg", "pivot [µm]", "N]"]),
+    ("driven_cam.toml", ["rad/s", "deg", "$F_n$ [N]", "torque [N m]"]),
+])
+def test_plot_draws_each_body_from_the_run_in_its_units(tmp_path, monkeypatch, example, labels):
+    from camdyn.plotting import layout_problems, style
+    seen = []
+
+    def hook(fig):
+        seen.append({"problems": layout_problems(fig),
+                     "ylabels": [ax.get_ylabel() for ax in fig.axes if ax.get_ylabel()],
+                     "lines": {ax.get_ylabel(): [line.get_ydata() for line in ax.get_lines()
+                                                 if len(line.get_ydata()) > 2] for ax in fig.axes}})
+    monkeypatch.setattr(style, "SAVE_HOOKS", [hook])
+    nc, png = tmp_path / "run.nc", tmp_path / "run.png"
+    status, _, err = run("simulate", EXAMPLES / example, "--revolutions", "1.5", "--sample-rate", "4kHz",
+                         "--out", nc, "--plot", png)
+    assert status == 0, err
+    assert png.stat().st_size > 10_000
+    drawn = seen[-1]
+    assert drawn["problems"] == [], drawn["problems"]
+    for label, shown in zip(labels, drawn["ylabels"]):
+        assert label in shown, (label, shown)
+    ds = xr.load_dataset(nc, engine="h5netcdf")
+    # the follower angle panel holds the run's alpha in degrees over the last revolution(s)
+    angle = next(v for k, v in drawn["lines"].items() if "deg" in k)
+    alpha = np.degrees(ds["alpha"].values)
+    alpha = alpha if alpha.ndim == 1 else alpha[:, 0]
+    assert np.array_equal(angle[0], alpha[-angle[0].size:])
+
+
+def test_plot_refuses_an_unknown_mechanism_kind(tmp_path):
+    from camdyn.plotting.mechanisms import plot_mechanism_history
+    ds = xr.Dataset({"alpha": ("time", np.zeros(3))}, coords={"time": [0.0, 1.0, 2.0]}, attrs={"mechanism": "lever"})
+    with pytest.raises(ParameterError, match="no figure for the mechanism kind 'lever'"):
+        plot_mechanism_history(ds, tmp_path / "x.png")
+    assert not (tmp_path / "x.png").exists()

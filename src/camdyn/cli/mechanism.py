@@ -104,8 +104,6 @@ def simulate_mechanism_command(source: str, assignments, speed: str | None, revo
     already); ``--speed`` sets the system's ``motion.speed``, the starting cam speed."""
     from camdyn.io.mechanism_config import load_mechanism, simulate_mechanism
 
-    if plot is not None:
-        raise ParameterError("--plot is not offered for a mechanism yet; write the results with --out")
     if not (isinstance(revolutions, (int, float)) and math.isfinite(revolutions) and revolutions > 0):
         raise ParameterError(f"--revolutions must be positive, got {revolutions!r}")
     overrides = parse_assignments(assignments)
@@ -117,7 +115,10 @@ def simulate_mechanism_command(source: str, assignments, speed: str | None, revo
     ds = simulate_mechanism(mechanism, revolutions=revolutions, sample_rate=fs,
                             rtol=DEFAULT_RTOL if rtol is None else rtol, method=method)
     summary = mechanism_summary(ds)
-    report_run(ds, summary, "simulate-mechanism", _print, out, json_out)
+    draw = None
+    if plot is not None:
+        from camdyn.plotting.mechanisms import plot_mechanism_history as draw
+    report_run(ds, summary, "simulate-mechanism", _print, out, json_out, plot, draw)
 
 
 def show_mechanism(source: str) -> str:
