@@ -50,6 +50,7 @@ mass distribution is not part of the model), so the pivot holds the arm with ``R
 from __future__ import annotations
 
 import math
+
 import numpy as np
 import xarray as xr
 
@@ -58,7 +59,7 @@ from camdyn.integrator import driver
 from camdyn.model import sliding_follower as model
 from camdyn.model import translating_follower as base
 from camdyn.simulation import limits
-from camdyn.simulation.rocking_roller import RockingFollower, _table, rocking_table
+from camdyn.simulation.rocking_roller import RockingFollower, rocking_table, spline_table
 from camdyn.simulation.sliding import FollowerFriction, event_kinds
 from camdyn.simulation.translating import TranslatingFollower, check_run_arguments, run_follower
 from camdyn.systems import registry as systems
@@ -77,7 +78,8 @@ def arm_tables(geometry, samples):
     centre = (geometry.pivot_x + length * np.cos(psi), geometry.pivot_y + length * np.sin(psi))
     normal = psi + sigma * 0.5 * math.pi + phi          # the angle of n: m = sigma e'(psi) turned by phi
     tangent = (np.sin(normal), -np.cos(normal))         # t: n turned clockwise
-    relative = (-slope * length * np.sin(psi) + centre[1], slope * length * np.cos(psi) - centre[0])  # psi' L e' - z x C
+    relative = (-slope * length * np.sin(psi) + centre[1],              # psi' L e' - z x C
+                slope * length * np.cos(psi) - centre[0])
     return phi, relative[0] * tangent[0] + relative[1] * tangent[1]   # (F4)
 
 
@@ -103,6 +105,11 @@ def check_arm_friction(follower, friction):
     if (friction.static > 0.0 or friction.roller_inertia > 0.0) and follower.contact != "rigid":
         raise ParameterError(f"friction at the arm's cam contact needs the rigid contact law, not "
                              f"{follower.contact!r}")
+    _, relative = arm_tables(follower.geometry, follower.samples)
+    if np.min(relative) <= 0.0:   # the slip's sign of a knife edge, and the model's, assume V > 0
+        worst = float(rocking_table(follower.geometry, follower.samples).theta[int(np.argmin(relative))])
+        raise GeometryError(f"at cam angle {math.degrees(worst):.3f} deg the roller centre stops or runs back "
+                            "along the cam (V <= 0 in eq. F4): friction is not modelled there")
     margin, angle = arm_jamming_margin(follower, friction.kinetic)
     if margin <= 0.0:
         raise GeometryError(f"friction.kinetic = {friction.kinetic}: the arm jams at cam angle "
@@ -119,7 +126,7 @@ def _parameters(follower, friction, speed, phase):
                                       restitution=follower.restitution, capture_velocity=follower.capture_velocity,
                                       citation=follower.citation)
     phi, relative = arm_tables(geometry, follower.samples)
-    arm = (geometry.arm_length, _table(table.theta, phi), _table(table.theta, relative))
+    arm = (geometry.arm_length, spline_table(table.theta, phi), spline_table(table.theta, relative))
     return model.pack(translating.pack(float(speed), float(phase)), friction.static, friction.kinetic,
                       friction.roller_inertia, arm=arm), table
 
@@ -150,8 +157,8 @@ def _initial_state(follower, table, p, initial_state, roller_speed):
 
 
 def simulate_rocking_friction(follower, friction, speed, duration, sample_rate=10e3, phase=0.0,
-                              initial_state=None, roller_speed=None, rtol=1e-10, atol=1e-12, max_step=None, max_events=None,
-                              max_steps=50_000_000) -> xr.Dataset:
+                              initial_state=None, roller_speed=None, rtol=1e-10, atol=1e-12, max_step=None,
+                              max_events=None, max_steps=50_000_000) -> xr.Dataset:
     """Simulate a rocking arm with Coulomb friction at its cam contact (rigid law).
 
     Parameters
