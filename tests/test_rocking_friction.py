@@ -143,10 +143,10 @@ def test_knife_edge_normal_force_and_slip_against_the_closed_form():
     """A knife edge held on the eccentric circle slides at u = omega V > 0, so N = M / (L
     (cos phi - mu_k sin phi)) (the moment balance with the friction's lever L sin phi),
     F = -mu_k N, and the pivot holds the balanced arm with -(N n + F t). Against the
-    closed form at every sample: u and the pivot's direction to 1e-10; the ratio N / M
-    to 1e-10 (the friction's law; M the compiled run's own holding moment); N itself to
-    the lift table's accuracy, 1e-7 relative (its spline's s'' is good to 1e-8 rad/rad^2;
-    measured 3e-9)."""
+    closed form at every sample: u and the pivot's reaction to 1e-10; the ratio N / M
+    to 1e-10 (the friction's law; M the compiled run's own holding moment; all three
+    measured 2e-15); N itself to the lift table's accuracy, 1e-7 relative (its spline's
+    s'' is good to some 1e-8 rad/rad^2; measured 5.7e-8)."""
     mu = 0.3
     follower = arm_on_circle("knife")
     w = 0.6 * rocking_liftoff_speed(follower)
