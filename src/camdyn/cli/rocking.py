@@ -11,7 +11,7 @@ from rich.table import Table
 
 from camdyn.cli.common import console
 from camdyn.cli.outputs import report_run
-from camdyn.cli.translating import DEFAULT_RTOL, add_run_rows, run_span
+from camdyn.cli.translating import DEFAULT_RTOL, add_friction_rows, add_run_rows, friction_summary, run_span
 from camdyn.errors import ParameterError
 from camdyn.params.config import parse_assignments
 
@@ -60,6 +60,7 @@ def _print(out: dict) -> None:
     table.add_row("max contact force", f"{out['contact_force_max_N']:.5g} N")
     table.add_row("max gap (arm angle)", f"{math.degrees(out['gap_max_rad']):.4g} deg")
     table.add_row("max pressure angle", f"{out['pressure_angle_max_deg']:.4g} deg")
+    add_friction_rows(table, out)
     add_run_rows(table, out)
     console.print(table)
 
@@ -70,7 +71,9 @@ def simulate_rocking_command(source: str, assignments, speed: str | None, revolu
     """Run ``camdyn simulate`` on a rocking roller or knife-edge follower (the outputs are
     checked already)."""
     from camdyn.io.rocking_config import load_rocking
+    from camdyn.simulation.rocking_friction import simulate_rocking_friction
     from camdyn.simulation.rocking_roller import simulate_rocking
+    from camdyn.simulation.sliding import friction_from_spec
 
     if method != "auto":
         raise ParameterError(f"--method {method}: the rocking roller is integrated with the automatic method only "
@@ -80,8 +83,15 @@ def simulate_rocking_command(source: str, assignments, speed: str | None, revolu
                              "results with --out")
     follower, spec = load_rocking(source, parse_assignments(assignments))
     omega, duration, fs = run_span(spec.name, spec.profile.speed, speed, revolutions, sample_rate)
-    ds = simulate_rocking(follower, omega, duration, sample_rate=fs, phase=spec.profile.phase,
-                          rtol=DEFAULT_RTOL if rtol is None else rtol)
+    friction = friction_from_spec(spec)
+    tolerance = DEFAULT_RTOL if rtol is None else rtol
+    if friction is None:
+        ds = simulate_rocking(follower, omega, duration, sample_rate=fs, phase=spec.profile.phase, rtol=tolerance)
+    else:
+        ds = simulate_rocking_friction(follower, friction, omega, duration, sample_rate=fs,
+                                       phase=spec.profile.phase, rtol=tolerance)
     ds.attrs["name"] = spec.name
     summary = rocking_summary(ds, follower, spec.name)
+    if friction is not None:
+        summary.update(friction_summary(ds))
     report_run(ds, summary, "simulate-rocking", _print, out, json_out)

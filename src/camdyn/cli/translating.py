@@ -98,16 +98,22 @@ def _print(out: dict) -> None:
     table.add_row("captures into sustained contact", f"{out['captures']}")
     table.add_row("max contact force", f"{out['contact_force_max_N']:.5g} N")
     table.add_row("max gap (flight height)", f"{out['gap_max_m'] * 1e3:.4g} mm")
-    if "friction" in out:
-        f = out["friction"]
-        table.add_row("friction mu_s / mu_k", f"{f['static']:.4g} / {f['kinetic']:.4g}")
-        table.add_row("max friction force", f"{f['friction_force_max_N']:.5g} N")
-        table.add_row("max slip velocity", f"{f['slip_velocity_max_m_per_s']:.4g} m/s")
-        table.add_row("heat of friction", f"{f['friction_heat_J']:.5g} J")
-        table.add_row("roller rolling", f"{100 * f['rolling_fraction']:.1f} % of the time ({f['rolling_starts']} "
-                                        f"starts, {f['slips']} slips)")
+    add_friction_rows(table, out)
     add_run_rows(table, out)
     console.print(table)
+
+
+def add_friction_rows(table: Table, out: dict) -> None:
+    """The friction's rows of a summary table, where the run had friction."""
+    if "friction" not in out:
+        return
+    f = out["friction"]
+    table.add_row("friction mu_s / mu_k", f"{f['static']:.4g} / {f['kinetic']:.4g}")
+    table.add_row("max friction force", f"{f['friction_force_max_N']:.5g} N")
+    table.add_row("max slip velocity", f"{f['slip_velocity_max_m_per_s']:.4g} m/s")
+    table.add_row("heat of friction", f"{f['friction_heat_J']:.5g} J")
+    table.add_row("roller rolling", f"{100 * f['rolling_fraction']:.1f} % of the time ({f['rolling_starts']} "
+                                    f"starts, {f['slips']} slips)")
 
 
 def simulate_translating_command(source: str, assignments, speed: str | None, revolutions: float,

@@ -49,8 +49,20 @@ force, 2 the profile's joints), then :data:`SLIP_GUARD` the slip velocity ``u`` 
 the margins ``mu_s N - F`` and ``mu_s N + F`` (a rolling roller; rates by central
 differences in time, the rolling contact being a function of time alone).
 
-Parameter vector: the translating follower's, then ``(mu_s, mu_k, J_r [kg m^2])`` as its
-last three slots (read from the end, after the profile table).
+**A rocking arm** (:mod:`camdyn.simulation.rocking_friction`) runs on this model with
+its lift angle as ``x`` [rad] and the holding moment ``M`` [N m] in place of ``F_line``.
+With the arm length ``L_a`` [m] and the pressure angle ``phi`` of the arm (eq. K4 of
+:mod:`camdyn.model.rocking_roller`), the cam's force ``N n + F t`` on the roller, passed
+to the arm at the roller's axle, has the moment ``N L_a cos(phi) + F L_a sin(phi)``
+about the pivot (the normal's and the tangent's levers), so that eq. (1) holds with
+``F_line = M / L_a`` and eqs. (2)-(6) with ``L`` the speed, per unit cam speed, of the
+roller centre relative to the cam's point under it, ``V(theta)`` [m] (the arm's tables,
+read from the block that the slot :data:`ARM` points to: ``L_a``, the start of the table
+of ``V``, then the table of ``phi``).
+
+Parameter vector: the translating follower's, then ``(arm, mu_s, mu_k, J_r [kg m^2])``
+as its last four slots (read from the end, after the profile table; ``arm`` the start
+of a rocking arm's block, 0 for a translating follower).
 
 Reference: R. L. Norton, *Cam Design and Manufacturing Handbook*, 2nd ed., Industrial
 Press 2009.
@@ -73,7 +85,8 @@ CONE = tf.GUARD_COUNT + 1         # guards of the cone margins mu_s N - F and mu
 GUARD_COUNT = tf.GUARD_COUNT + 3
 SLIP = tf.MODE_SIZE               # mode slot: sign of the slip velocity, 0 rolling
 MODE_SIZE = tf.MODE_SIZE + 1
-FRICTION_SLOTS = 3
+FRICTION_SLOTS = 4
+ARM = -4                          # slot, from the end of p, of the start of a rocking arm's block (0: none)
 FLAT_FACE = 0.0
 KNIFE_FACE = 1.0
 #: A slip [m/s] below this fraction of ``omega Rp`` at the start of a contact is rolling's
@@ -91,6 +104,22 @@ def coefficients(p):
 
 
 @numba.njit(cache=True)
+def arm_block(p):
+    """The start in ``p`` of a rocking arm's block, 0 for a translating follower."""
+    return int(p[p.size + ARM])
+
+
+@numba.njit(cache=True)
+def arm_geometry(theta, line, p):
+    """``(sin phi, cos phi, V [m], V_theta [m], M / L_a [N])`` of a rocking arm at the cam
+    angle ``theta`` [rad] with the holding moment ``line`` [N m] (module docstring)."""
+    b = arm_block(p)
+    phi = profiles.evaluate(p, b + 2, theta)[0]
+    speed, slope, _, _ = profiles.evaluate(p, int(p[b + 1]), theta)
+    return math.sin(phi), math.cos(phi), speed, slope, line / p[b]
+
+
+@numba.njit(cache=True)
 def rolls(p):
     """Whether the follower has a roller whose spin friction drives (``mu_s > 0``)."""
     return p[tf.FACE] == tf.ROLLER_FACE and coefficients(p)[0] > 0.0
@@ -104,6 +133,8 @@ def geometry(t, p):
     s, s1, s2, _ = profiles.evaluate(p, tf.PROFILE, theta)
     w = p[tf.SPEED]
     line = p[tf.MASS] * w * w * s2 + tf.spring_force(s, w * s1, p)   # eq. (3) of the translating follower
+    if arm_block(p) != 0:
+        return arm_geometry(theta, line, p)
     if p[tf.FACE] == FLAT_FACE:
         return 0.0, 1.0, p[tf.PRIME_RADIUS] + s, s1, line
     big = math.sqrt(p[tf.PRIME_RADIUS] ** 2 - p[tf.OFFSET] ** 2) + s
@@ -292,7 +323,13 @@ def monitor(t, y, mode, p):
     return forces(t, mode[SLIP], p)[0]
 
 
-def pack(head, static, kinetic, inertia):
+def pack(head, static, kinetic, inertia, arm=None):
     """The parameter vector: the translating follower's ``head`` (with its profile table),
-    then ``(mu_s [-], mu_k [-], J_r [kg m^2])``."""
-    return np.concatenate([head, [static, kinetic, inertia]])
+    a rocking arm's block from ``arm = (L_a [m], table of phi [rad], table of V [m])``
+    (profile tables over the cam angle; None for a translating follower), then ``(the
+    block's start, mu_s [-], mu_k [-], J_r [kg m^2])``."""
+    if arm is None:
+        return np.concatenate([head, [0.0, static, kinetic, inertia]])
+    length, pressure, speed = arm
+    block = [length, head.size + 2.0 + pressure.size]
+    return np.concatenate([head, block, pressure, speed, [float(head.size), static, kinetic, inertia]])

@@ -42,6 +42,7 @@ from pathlib import Path
 
 from camdyn.errors import ParameterError, UnitError, UnknownKeyError
 from camdyn.params.config import read_toml_file
+from camdyn.params.follower_friction import FRICTION_SCHEMA, check_friction
 from camdyn.params.profile_table import profile_spec
 from camdyn.params.profiles import HERTZ_DAMPING_LAWS, HERTZ_KEYS, TranslatingSpec
 from camdyn.params.units import parse_quantity
@@ -83,6 +84,7 @@ SCHEMA: dict[str, tuple[str, object, str]] = {
     "contact.tip_radius": ("m", 0.0, "tip radius of a knife edge, point contact (hertz)"),
     "contact.damping_law": ("str", "none", "damping law (hertz): " + ", ".join(HERTZ_DAMPING_LAWS)),
     "contact.reference_velocity": ("m/s", 1e-3, "smallest approach velocity of the restitution laws (hertz)"),
+    **FRICTION_SCHEMA,
 }
 #: Contact laws of the arm.
 CONTACT_LAWS = ("rigid", "compliant", "hertz")
@@ -116,6 +118,9 @@ class RockingSpec:
     contact_stiffness, contact_damping : float
         k_c [N m/rad] and c_c [N m s/rad] (compliant); ``contact_damping`` is the viscous
         law's c [N s/m] under the Hertz law.
+    static_friction, kinetic_friction, roller_inertia : float
+        mu_s [-], mu_k [-] (None: mu_s) and J_r [kg m^2] of the ``[friction]`` table
+        (:mod:`camdyn.params.follower_friction`; rigid contact law only).
     hertz : dict
         The Hertz law's keyword arguments of
         :class:`camdyn.simulation.translating_contact.HertzContact` in SI units (empty
@@ -144,6 +149,9 @@ class RockingSpec:
     contact_stiffness: float = 0.0
     contact_damping: float = 0.0
     hertz: dict = field(default_factory=dict)
+    static_friction: float = 0.0
+    kinetic_friction: float | None = None
+    roller_inertia: float = 0.0
 
 
 def _value(key: str, raw, unit: str):
@@ -198,6 +206,7 @@ def rocking_spec_from_table(flat: dict, name: str = "custom", citation: str = ""
         raise ParameterError(f"follower.lift_direction must be one of {', '.join(LIFT_DIRECTIONS)}, "
                              f"got {v['follower.lift_direction']!r}")
     _check_contact(flat, v)
+    check_friction(v)
     passed = {key: value for key, value in flat.items() if key.startswith(_PASSED)}
     profile = profile_spec(passed, face, v["follower.roller_radius"], name, folder)
     law = v["contact.law"]
@@ -211,7 +220,9 @@ def rocking_spec_from_table(flat: dict, name: str = "custom", citation: str = ""
         damping=v["follower.damping"], stiffness=v["spring.stiffness"], preload=v["spring.preload"],
         restitution=v["contact.restitution"], capture_velocity=v["contact.capture_velocity"], profile=profile,
         contact=law, contact_stiffness=v["contact.stiffness"] if law == "compliant" else 0.0,
-        contact_damping=v["contact.damping"] if law == "compliant" else 0.0, hertz=hertz)
+        contact_damping=v["contact.damping"] if law == "compliant" else 0.0, hertz=hertz,
+        static_friction=v["friction.static"], kinetic_friction=v["friction.kinetic"],
+        roller_inertia=v["friction.roller_inertia"])
 
 
 def _check_contact(flat: dict, v: dict) -> None:

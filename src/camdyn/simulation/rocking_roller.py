@@ -272,7 +272,7 @@ def _rest_angle(geometry, theta, psi):
     return value if sigma * value <= sigma * psi[0, best] else float(psi[0, best])
 
 
-def _table(theta, values, cubic=True):
+def spline_table(theta, values, cubic=True):
     """A profile table [the values' unit] through ``values`` at the equally spaced cam
     angles ``theta`` [rad] over one revolution: a periodic cubic spline (SciPy's
     ``CubicSpline``), or straight lines between the samples (``cubic=False``)."""
@@ -310,8 +310,8 @@ def rocking_table(geometry, samples=SAMPLES):
 
     lever = geometry.arm_length * np.cos(config.pressure_angle)                     # (A3)
     curvature = surface_curvature(geometry, config.parameter)                       # (K5)
-    return RockingTable(profile(_table(theta, lift[0])), rest, theta, lift, config.pressure_angle,
-                        profile(_table(theta, lever)), profile(_table(theta, curvature, cubic=False)))
+    return RockingTable(profile(spline_table(theta, lift[0])), rest, theta, lift, config.pressure_angle,
+                        profile(spline_table(theta, lever)), profile(spline_table(theta, curvature, cubic=False)))
 
 
 def _angular_law(follower, table):

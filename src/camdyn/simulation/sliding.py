@@ -201,7 +201,7 @@ def _samples(p, t, y, modes):
     return columns
 
 
-def _event_kinds(p, events, contact):
+def event_kinds(p, events, contact):
     """Kinds and approach velocities [m/s] of the logged events, ``contact`` whether the
     run starts in sustained contact; a joint of the profile is a separation where the
     follower leaves the cam there, else the kind ``joint``."""
@@ -232,7 +232,7 @@ def _event_kinds(p, events, contact):
 
 def _dataset(p, t, y, modes, events):
     c = _samples(p, t, y, modes)
-    kinds, velocities = _event_kinds(p, events, modes.shape[0] > 0 and modes[0, 0] > 0.5)
+    kinds, velocities = event_kinds(p, events, modes.shape[0] > 0 and modes[0, 0] > 0.5)
     shown = kinds != "joint"   # the joints that changed nothing are left out
     events, kinds, velocities = events[shown], kinds[shown], velocities[shown]
     rolling = (modes[:, 0] > 0.5) & (modes[:, model.SLIP] == 0.0)
