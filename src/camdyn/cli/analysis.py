@@ -46,7 +46,8 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
                        revolutions: int = typer.Option(60, help="Cam periods simulated per point."),
                        discard: int = typer.Option(30, help="Of which the first are dropped (transient)."),
                        rtol: float = typer.Option(3e-7, help="Relative tolerance of the integrator."),
-                       atol: float = typer.Option(1e-10, help="Absolute tolerance [rad, rad/s] (a mechanism runs with its own)."),
+                       atol: float = typer.Option(1e-10, help="Absolute tolerance [rad, rad/s] (a mechanism "
+                                                                 "runs with its own)."),
                        out: Path = typer.Option(Path("regime_map.nc"), help="Result file (.nc)."),
                        plot: Optional[Path] = typer.Option(None, help="Figure (default: the result's name, .png)."),
                        workers: Optional[int] = typer.Option(None, help="Worker processes (default every core)."),
@@ -63,11 +64,10 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
     """Regime map over two parameters: every point simulated (contact kept, vr reversal, k
     impacts per revolution, irregular), beside the inverse-kinematics prediction."""
     from camdyn.params.config import parse_assignments
+    from camdyn.params.mechanism import is_mechanism
     from camdyn.plotting import plot_regime_map
     from camdyn.sweeps import spec_from_dict
     from camdyn.sweeps.regime_map import regime_map
-
-    from camdyn.params.mechanism import is_mechanism
 
     check_outputs(netcdf=out, figure=plot or out.with_suffix(".png"), force=force)
     mechanism = is_mechanism(source)

@@ -21,16 +21,17 @@ STATUS_OK, STATUS_REFUSED, STATUS_SOLVER = 0, 1, 2
 
 
 def sample_rate(mechanism, samples: int) -> float:
-    """Output sampling rate [Hz]: ``samples`` per period of the starting cam speed."""
-    spec = mechanism.spec
-    speed = spec.initial_speed if spec.initial_speed is not None else mechanism.system.motion.angular_speed
-    return samples * abs(speed) / (2.0 * np.pi)
+    """Output sampling rate [Hz]: ``samples`` per period of the starting cam speed (the
+    motion's speed [Hz], or a driven shaft's ``initial_speed`` [rad/s] over 2 pi)."""
+    if mechanism.spec.initial_speed is not None:
+        return samples * abs(mechanism.spec.initial_speed) / (2.0 * np.pi)
+    return samples * abs(mechanism.system.motion.speed)
 
 
 def prepare_chunk(spec, chunk: int) -> dict:
     """The mechanisms of chunk ``chunk`` (None where the point's values make none: the
     point is refused with its reason)."""
-    from camdyn.sweeps.mechanism_spec import _check, point_mechanism
+    from camdyn.sweeps.mechanism_spec import check_mechanism, point_mechanism
 
     start = chunk * spec.chunk
     n = min(start + spec.chunk, spec.points) - start
@@ -38,7 +39,7 @@ def prepare_chunk(spec, chunk: int) -> dict:
     for i in range(n):
         try:
             mechanism = point_mechanism(spec.source, spec.overrides, spec.point_values(start + i))
-            _check(mechanism)
+            check_mechanism(mechanism)
         except (CamdynError, ValueError, ArithmeticError) as exc:
             mechanism = None
             status[i] = STATUS_REFUSED

@@ -29,7 +29,8 @@ from camdyn.params import mechanism as schema
 from camdyn.params.config import SCHEMA as SYSTEM_SCHEMA
 from camdyn.params.config import convert_value
 
-__all__ = ["MECHANISM_METRICS", "KIND_METRICS", "key_unit", "override_text", "point_mechanism", "base_mechanism",
+__all__ = ["MECHANISM_METRICS", "KIND_METRICS", "key_unit", "override_text", "point_mechanism", "check_mechanism",
+           "base_mechanism",
            "check_values"]
 
 #: metric name -> what it adds to the result of a sweep over a mechanism
@@ -65,7 +66,7 @@ def key_unit(key: str) -> tuple[str, callable]:
             unit, _ = SYSTEM_SCHEMA[inner]
             if unit in ("str", "bool", "int", "law"):
                 raise ParameterError(f"sweep spec: {key} cannot be swept (only quantities with units can)")
-            return ("Hz" if unit == "speed" else unit), (lambda raw: float(convert_value(inner, raw, {})))
+            return ("Hz" if unit == "speed" else unit), _named(key, lambda raw: float(convert_value(inner, raw, {})))
     if key not in schema.SCHEMA:
         if key in SYSTEM_SCHEMA:
             raise UnknownKeyError(f"sweep spec: {key!r} is a key of the cam-follower: over a mechanism write it "
@@ -77,7 +78,17 @@ def key_unit(key: str) -> tuple[str, callable]:
     if unit in ("str", "list"):
         raise ParameterError(f"sweep spec: {key} cannot be swept (only quantities with units can)")
     unit = "rad/s" if unit == schema.ANGULAR_SPEED else unit
-    return unit, (lambda raw: float(schema._value(key, raw)))
+    return unit, _named(key, lambda raw: float(schema._value(key, raw)))
+
+
+def _named(key: str, convert):
+    """``convert`` with its refusals naming the ``[[vary]]`` key."""
+    def named(raw):
+        try:
+            return convert(raw)
+        except CamdynError as exc:
+            raise type(exc)(f"sweep spec: [[vary]] {key}: {exc}") from None
+    return named
 
 
 def override_text(key: str, value: float):
@@ -97,7 +108,7 @@ def point_mechanism(source: str, overrides: dict, values: dict):
     return load_mechanism(source, changes)
 
 
-def _check(mechanism) -> None:
+def check_mechanism(mechanism) -> None:
     """The checks a run makes before it starts, without running it: the cam-follower's
     static equilibrium, a constant motion and follower 2's system."""
     from camdyn.simulation.runner import prepare
@@ -120,7 +131,7 @@ def base_mechanism(source: str, overrides: dict) -> tuple[str, str]:
         key_unit(key)
     mechanism = point_mechanism(source, overrides, {})
     try:
-        _check(mechanism)
+        check_mechanism(mechanism)
     except CamdynError as exc:
         raise ParameterError(f"sweep spec: the base mechanism {source}: {exc}") from None
     return mechanism.spec.kind, mechanism_to_toml(mechanism)
@@ -132,6 +143,6 @@ def check_values(source: str, overrides: dict, vary) -> None:
     for v in vary:
         for value in sorted(set(v.values)):
             try:
-                _check(point_mechanism(source, overrides, {v.key: value}))
+                check_mechanism(point_mechanism(source, overrides, {v.key: value}))
             except CamdynError as exc:
                 raise ParameterError(f"sweep spec: [[vary]] {v.key} = {value:g} {v.unit}: {exc}") from None
