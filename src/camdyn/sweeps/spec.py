@@ -31,6 +31,11 @@ A spec is a TOML file (or the same tables as a dict)::
     [output]
     path = "bifurcation.nc"               # relative to the working directory, or absolute
 
+A ``[system] source`` that is a mechanism file (a ``[mechanism]`` table) makes a sweep
+over that mechanism: its keys, checks and metrics are those of
+:mod:`camdyn.sweeps.mechanism_spec`, and each point runs through
+:func:`camdyn.io.mechanism_config.simulate_mechanism`.
+
 A relative ``[system] source`` TOML path is taken relative to the spec's folder; a
 relative ``[output] path`` relative to the current working directory (the result goes
 where the command runs, never beside a spec in the package's or the examples' folders).
