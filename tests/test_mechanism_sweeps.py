@@ -4,6 +4,7 @@ its metrics recomputed here from the run's own samples; the flexible pivot's sti
 against the rocking sweep of the rigid pivot, below and above the loss of contact that
 inverse kinematics predicts; interrupt and resume; refusals before any work."""
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -169,8 +170,19 @@ def test_the_example_spec_runs_on_the_cli_with_its_figure(tmp_path):
             .replace('["8 Hz", "12 Hz", "16 Hz"]', '["8 Hz", "16 Hz"]').replace('["2e7 N/m", "2e8 N/m"]', '["2e8 N/m"]')
             .replace("revolutions = 40", "revolutions = 24").replace("discard = 20", "discard = 12"))
     (tmp_path / "spec.toml").write_text(spec)
-    result = CliRunner().invoke(app, ["sweep", "spec.toml", "--workers", "0", "--quiet"])
+    result = CliRunner().invoke(app, ["sweep", "spec.toml", "--workers", "0", "--json"])
     assert result.exit_code == 0, result.output
+    document = json.loads(result.stdout)
+    assert document["schema"] == "camdyn.sweep/1"
+    summary = document["summary"]
+    assert {k: summary[k] for k in ("points", "failed", "mechanism")} == {"points": 2, "failed": 0,
+                                                                          "mechanism": "flexible-pivot"}
+    # 8 Hz keeps contact; 16 Hz impacts (periodic once its transient has gone, which 12
+    # discarded revolutions do not promise)
+    regimes = summary["regimes"]
+    assert regimes["contact_kept"] == 1 and regimes["periodic_impacts"] + regimes["irregular_impacts"] == 1
+    assert document["swept"] == {"system.motion.speed": "Hz", "pivot.stiffness": "N/m"}
+    assert [Path(f["path"]).name for f in document["files"]] == ["mechanism_sweep.nc", "mechanism_sweep.png"]
     assert (tmp_path / "mechanism_sweep.png").stat().st_size > 0
     ds = xr.load_dataset(tmp_path / "mechanism_sweep.nc")
     assert ds.attrs["mechanism"] == "flexible-pivot"
