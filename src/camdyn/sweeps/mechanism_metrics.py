@@ -148,15 +148,14 @@ def point_metrics(ds, kind: str, metrics, revolutions: int, discard: int, sample
 
 def _regime(ch: dict, section: np.ndarray, scale: np.ndarray, contact: np.ndarray,
             onsets: np.ndarray) -> tuple[int, int]:
-    """The regime code (:data:`camdyn.sweeps.metrics.REGIMES`) and Poincare period."""
+    """The regime code (:data:`camdyn.sweeps.metrics.REGIMES`) and Poincare period (as
+    the rocking sweep's, also while contact is kept)."""
+    rows = section[np.all(np.isfinite(section), axis=1)]
+    period = int(M.poincare_period(rows[None], scale[None] + 1e-15)[0]) if len(rows) >= 2 else 0
     if np.all(contact[1:]) and not np.any(onsets):
         vr = ch.get("sliding_velocity")
         reversal = vr is not None and bool(np.any((np.min(vr[1:], axis=0) < 0.0) & (np.max(vr[1:], axis=0) > 0.0)))
-        return (1 if reversal else 0), 0
-    rows = section[np.all(np.isfinite(section), axis=1)]
-    if len(rows) < 2:
-        return 3, 0
-    period = int(M.poincare_period(rows[None], scale[None] + 1e-15)[0])
+        return (1 if reversal else 0), period
     return (2 if period > 0 else 3), period
 
 
