@@ -190,3 +190,23 @@ def test_the_example_spec_runs_on_the_cli_with_its_figure(tmp_path):
     assert ds.attrs["mechanism"] == "flexible-pivot"
     assert ds["system.motion.speed"].attrs["units"] == "Hz" and ds["pivot.stiffness"].attrs["units"] == "N/m"
     np.testing.assert_array_equal(ds["impacts_per_revolution"].values.ravel(), [0.0, 1.0])
+
+
+def test_camdyn_map_over_a_mechanism_draws_the_rigid_pivots_loss_of_contact(tmp_path):
+    from typer.testing import CliRunner
+
+    from camdyn.cli.app import app
+
+    result = CliRunner().invoke(app, ["map", PIVOT, "--x", "pivot.stiffness=2e8N/m,5e7N/m", "--y", "speed=8Hz,16Hz",
+                                      "--set", "system.cam.runout=1 mm", "--revolutions", "24", "--discard", "12",
+                                      "--workers", "0", "--quiet", "--out", "map.nc"])
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "map.png").stat().st_size > 0
+    ds = xr.load_dataset(tmp_path / "map.nc")
+    # the map's curve is that of the rigid pivot at its grid of 512 cam angles
+    loss = loss_of_contact_speed(load_system("sundar2014-impact", {"cam.runout": "1 mm"}), points=512)
+    np.testing.assert_allclose(ds["loss_of_contact_speed"].values, [loss, loss], rtol=1e-12)
+    # inverse kinematics keeps contact at 8 Hz and loses it at 16 Hz; so do both bearings
+    np.testing.assert_array_equal(ds["kinematic_regime"].values, [[0, 2], [0, 2]])
+    assert np.all(ds["regime"].values[:, 0] == 0) and np.all(ds["regime"].values[:, 1] >= 2)
+    assert (ds.attrs["agreement_kept_agree"], ds.attrs["agreement_lost_agree"]) == (2, 2)
