@@ -176,9 +176,9 @@ class SweepSpec:
         """The base system, rebuilt from :attr:`system_toml` (so that every process, local
         or on a cluster without the spec's files, starts from the same numbers); a sweep
         over a mechanism's base cam-follower (follower 1)."""
-        if self.mechanism:
+        if self.mechanism and self._base is None:
             from camdyn.sweeps.mechanism_spec import point_mechanism
-            return point_mechanism(self.source, self.overrides, {}).system
+            object.__setattr__(self, "_base", point_mechanism(self.source, self.overrides, {}).system)
         if self._base is None:
             object.__setattr__(self, "_base", system_from_toml(self.system_toml))
         return self._base
