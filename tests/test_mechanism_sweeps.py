@@ -210,3 +210,23 @@ def test_camdyn_map_over_a_mechanism_draws_the_rigid_pivots_loss_of_contact(tmp_
     np.testing.assert_array_equal(ds["kinematic_regime"].values, [[0, 2], [0, 2]])
     assert np.all(ds["regime"].values[:, 0] == 0) and np.all(ds["regime"].values[:, 1] >= 2)
     assert (ds.attrs["agreement_kept_agree"], ds.attrs["agreement_lost_agree"]) == (2, 2)
+
+
+def test_two_followers_carry_the_follower_dimension_with_each_followers_own_values():
+    brake = str(MECHANISMS / "drum_brake.toml")
+    revolutions, discard, samples = 6, 2, 256
+    spec = _spec(brake, [{"key": "second.placement", "values": ["170 deg"]}],
+                 {"revolutions": revolutions, "discard": discard, "samples_per_revolution": samples})
+    ds = run_sweep(spec, workers=0, progress=False).load()
+    assert ds["max_normal_force"].dims == ("second.placement", "follower")
+    assert ds["poincare_alpha"].dims == ("second.placement", "follower", "revolution")
+    np.testing.assert_array_equal(ds["follower"].values, [1, 2])
+    assert ds["second.placement"].attrs["units"] == "rad"
+    placement = float(ds["second.placement"].values[0])     # 170 deg in radians, as the sweep read it
+    assert placement == pytest.approx(np.deg2rad(170.0), rel=1e-15)
+    mechanism = load_mechanism(brake, {"second.placement": f"{placement!r} rad"})
+    direct = simulate_mechanism(mechanism, revolutions=revolutions, sample_rate=samples * mechanism.system.motion.speed,
+                                rtol=spec.rtol)
+    start = discard * samples
+    np.testing.assert_array_equal(ds["max_normal_force"].values[0], direct["Fn"].values[start:].max(axis=0))
+    assert ds["max_normal_force"].values[0, 0] != ds["max_normal_force"].values[0, 1]
