@@ -5,10 +5,13 @@ samples from ``discard`` periods of the starting cam speed on (the run is sample
 
 - ``impacts``: contact onsets per cam revolution [1/rev], per follower: the rises of the
   sampled contact flag ``in_contact`` in the window (counting from the sample before it),
-  over the cam revolutions the window spans (its cam-angle advance over 2 pi; ``kept``
-  at the flexible pivot's constant speed). A contact shorter than one sample spacing
-  between two samples is not seen: raise ``samples_per_revolution`` to resolve it.
-- ``max_force``: the largest sampled normal force [N], per follower.
+  plus the sample intervals that begin and end out of contact but over which the cam did
+  work on the follower (its ``cam_work`` state, which free flight leaves unchanged to the
+  last bit, changed): a contact that fell between two samples, counted once however
+  many it was; over the cam revolutions the window spans (its cam-angle advance over
+  2 pi; ``kept`` at the flexible pivot's constant speed).
+- ``max_force``: the largest sampled normal force [N], per follower (a contact between
+  two samples is not seen here: raise ``samples_per_revolution`` to resolve its peak).
 - ``poincare``: follower angle [rad] and angular velocity [rad/s], per follower, once
   per cam revolution: at the samples of whole periods for the flexible pivot (constant
   speed), and where the cam angle passes whole turns from its start (linear
@@ -68,7 +71,7 @@ def _channels(ds, kind: str, start: int) -> dict:
     def per(name):
         values = ds[name].values[start - 1:]
         return values if values.ndim == 2 else values[:, None]
-    out = {name: per(name) for name in ("alpha", "alpha_dot", "Fn", "in_contact")}
+    out = {name: per(name) for name in ("alpha", "alpha_dot", "Fn", "in_contact", "cam_work")}
     if "sliding_velocity" in ds:
         out["sliding_velocity"] = per("sliding_velocity")
     out["cam_angle"] = ds["cam_angle"].values[start - 1:]
@@ -118,7 +121,10 @@ def point_metrics(ds, kind: str, metrics, revolutions: int, discard: int, sample
     start = discard * samples
     ch = _channels(ds, kind, start)
     contact = ch["in_contact"] > 0.5
-    onsets = np.sum(~contact[:-1] & contact[1:], axis=0).astype(float)
+    work = ch["cam_work"]
+    free = ~contact[:-1] & ~contact[1:]
+    hidden = free & (work[1:] != work[:-1])   # a contact between two samples out of contact
+    onsets = np.sum((~contact[:-1] & contact[1:]) | hidden, axis=0).astype(float)
     if kind == "flexible-pivot":
         turns = float(kept)
     else:

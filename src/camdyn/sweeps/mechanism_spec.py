@@ -35,7 +35,8 @@ __all__ = ["MECHANISM_METRICS", "KIND_METRICS", "key_unit", "override_text", "po
 
 #: metric name -> what it adds to the result of a sweep over a mechanism
 MECHANISM_METRICS = {
-    "impacts": "impacts (contact onsets of the sampled contact flag) per cam revolution, per follower [1/rev]",
+    "impacts": "impacts (rises of the sampled contact flag, and contacts between two samples found by the cam's "
+               "work on the follower) per cam revolution, per follower [1/rev]",
     "max_force": "largest sampled normal contact force, per follower [N]",
     "poincare": "follower angle [rad] and angular velocity [rad/s] once per cam revolution (by cam angle), "
                 "per follower",

@@ -86,7 +86,8 @@ METRICS = {
 _RUN_DEFAULTS = {"revolutions": 60.0, "discard": 20.0, "samples_per_revolution": 64, "rtol": 3e-7,
                  "atol": 1e-10, "chunk": 8}
 #: run defaults over a mechanism: its metrics come from the sampled run, so it is sampled
-#: finely enough to see an impact's contact (about 0.4 ms at the chapter 3 rig's 16 Hz)
+#: finely enough to resolve an impact's contact and peak force (about 0.4 ms at the
+#: chapter 3 rig's 16 Hz)
 _MECHANISM_RUN = {"samples_per_revolution": 1024, "atol": 1e-11}
 _TABLES = {"system", "vary", "run", "metrics", "output"}
 #: Most points a sweep may have [-] (10^9 at a millisecond each is 12 CPU-days).
