@@ -16,12 +16,15 @@ from camdyn.errors import ParameterError
 _ALIASES = {"speed": "motion.speed"}
 
 
-def _axis(text: str, option: str) -> dict:
-    """``KEY=START:STOP:COUNT`` or ``KEY=V1,V2,...`` (units as text) -> a [[vary]] table."""
+def _axis(text: str, option: str, mechanism: bool = False) -> dict:
+    """``KEY=START:STOP:COUNT`` or ``KEY=V1,V2,...`` (units as text) -> a [[vary]] table
+    (over a mechanism, ``speed`` is its cam-follower's ``system.motion.speed``)."""
     key, sep, grid = text.partition("=")
     if not sep or not key.strip() or not grid.strip():
         raise ParameterError(f"{option}: expected KEY=START:STOP:COUNT or KEY=V1,V2,..., got {text!r}")
     key = _ALIASES.get(key.strip(), key.strip())
+    if mechanism and key == "motion.speed":
+        key = "system.motion.speed"
     if ":" in grid:
         parts = grid.split(":")
         if len(parts) != 3:
@@ -43,7 +46,8 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
                        revolutions: int = typer.Option(60, help="Cam periods simulated per point."),
                        discard: int = typer.Option(30, help="Of which the first are dropped (transient)."),
                        rtol: float = typer.Option(3e-7, help="Relative tolerance of the integrator."),
-                       atol: float = typer.Option(1e-10, help="Absolute tolerance [rad, rad/s]."),
+                       atol: float = typer.Option(1e-10, help="Absolute tolerance [rad, rad/s] (a mechanism "
+                                                                 "runs with its own)."),
                        out: Path = typer.Option(Path("regime_map.nc"), help="Result file (.nc)."),
                        plot: Optional[Path] = typer.Option(None, help="Figure (default: the result's name, .png)."),
                        workers: Optional[int] = typer.Option(None, help="Worker processes (default every core)."),
@@ -60,12 +64,14 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
     """Regime map over two parameters: every point simulated (contact kept, vr reversal, k
     impacts per revolution, irregular), beside the inverse-kinematics prediction."""
     from camdyn.params.config import parse_assignments
+    from camdyn.params.mechanism import is_mechanism
     from camdyn.plotting import plot_regime_map
     from camdyn.sweeps import spec_from_dict
     from camdyn.sweeps.regime_map import regime_map
 
     check_outputs(netcdf=out, figure=plot or out.with_suffix(".png"), force=force)
-    first, second = _axis(x, "--x"), _axis(y, "--y")
+    mechanism = is_mechanism(source)
+    first, second = _axis(x, "--x", mechanism), _axis(y, "--y", mechanism)
     if first["key"] == second["key"]:
         raise ParameterError("--x and --y vary the same parameter")
     table = {"system": {"source": source, "set": parse_assignments(set_)},
@@ -73,6 +79,8 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
              "run": {"revolutions": revolutions, "discard": discard, "rtol": rtol, "atol": atol},
              "metrics": {"names": ["regime", "impacts", "residual", "max_force"]},
              "output": {"path": str(out)}}
+    if mechanism:   # its own metrics, and the absolute tolerance of its entry
+        del table["metrics"], table["run"]["atol"]
     spec = spec_from_dict(table, name=out.stem)
     from camdyn.sweeps.execution import check_dask_address
     from camdyn.sweeps.regime_map import map_curves, parse_curve

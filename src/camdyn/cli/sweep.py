@@ -8,7 +8,15 @@ from typing import List, Optional
 
 import typer
 
-from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, notice_if_uncached, parse_grid
+from camdyn.cli.common import (
+    ForceOption,
+    JsonOption,
+    SetOption,
+    console,
+    err_console,
+    notice_if_uncached,
+    parse_grid,
+)
 from camdyn.cli.outputs import announce, check_outputs, emit_json
 from camdyn.sweeps.metrics import REGIMES
 
@@ -28,7 +36,8 @@ def sweep(spec_path: Path = typer.Argument(..., metavar="SPEC.toml", help="Sweep
           no_plot: bool = typer.Option(False, "--no-plot", help="Write no figure."),
           force: bool = typer.Option(False, "--force", help="Overwrite an existing result and figure (checkpoints "
                                                             "are resumed, or discarded with --restart)."),
-          quiet: bool = typer.Option(False, "--quiet", help="No progress bar.")):
+          quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
+          json_: bool = JsonOption):
     """Run a parameter sweep; resume it from its checkpoints if it was interrupted.
 
     A relative result path in the spec (its output table) is taken relative to the
@@ -47,21 +56,30 @@ def sweep(spec_path: Path = typer.Argument(..., metavar="SPEC.toml", help="Sweep
 
     check_dask_address(dask)   # before the compile notice: bad input is refused before any work
     notice_if_uncached(sweeps=True)
-    ds = run_sweep(spec, workers=workers, dask=dask, threads=threads, progress=not quiet, restart=restart,
-                   keep_parts=keep_parts, echo=_echo)
+    ds = run_sweep(spec, workers=workers, dask=dask, threads=threads, progress=not (quiet or json_),
+                   restart=restart, keep_parts=keep_parts, echo=_echo_err if json_ else _echo)
     failed = int((ds["status"] != 0).sum())
-    announce(spec.output, detail=f": {spec.points} points, {failed} failed")
-    if failed:
-        reasons = sorted(set(str(r) for r in ds["failure"].values.ravel() if str(r)))
-        for reason in reasons[:5]:
-            console.print(f"  failed: {reason}", highlight=False, soft_wrap=True)
+    files = [announce(spec.output, json_, detail=f": {spec.points} points, {failed} failed")]
+    reasons = sorted(set(str(r) for r in ds["failure"].values.ravel() if str(r)))
+    for reason in reasons[:5]:
+        (err_console if json_ else console).print(f"  failed: {reason}", highlight=False, soft_wrap=True)
     if figure is not None:
-        announce(plot_sweep(ds, figure))
+        files.append(announce(plot_sweep(ds, figure), json_))
+    if json_:
+        summary = {"points": spec.points, "failed": failed, "mechanism": spec.mechanism or None}
+        if "regime" in ds:
+            summary["regimes"] = {name: int((ds["regime"] == code).sum()) for code, name in REGIMES.items()}
+        emit_json("sweep", summary, swept={v.key: v.unit for v in spec.vary}, metrics=list(spec.metrics),
+                  failures=reasons[:5], files=files)
     ds.close()
 
 
 def _echo(message: str) -> None:
     console.print(message, markup=False, highlight=False, soft_wrap=True)
+
+
+def _echo_err(message: str) -> None:
+    err_console.print(message, markup=False, highlight=False, soft_wrap=True)
 
 
 def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),

@@ -90,8 +90,10 @@ def plot_sweep(ds: xr.Dataset, path: str | Path) -> Path:
     the largest normal force, as far as the metrics hold them. Two or more: maps of the
     regime and of impacts per revolution over the first two swept dimensions (later
     dimensions at their first value). Swept parameters are drawn in the unit the spec
-    gave them in.
+    gave them in. A sweep over two followers is drawn for follower 1.
     """
+    if "follower" in ds.dims:
+        ds = ds.isel(follower=0)
     dims = list(ds["status"].dims)
     if len(dims) == 1:
         return _sweep_line(ds, dims, path)
@@ -164,7 +166,10 @@ def _kinematic_lines(ax, ds: xr.Dataset, dims: list, x: np.ndarray, y: np.ndarra
 def plot_regime_map(ds: xr.Dataset, path: str | Path) -> Path:
     """Regime map (:func:`camdyn.sweeps.regime_map.regime_map`): simulated regions over
     the two swept parameters (in the units the spec gave), with the inverse-kinematics
-    loss-of-contact curve (solid) and the boundary of sliding-velocity reversal (dashed)."""
+    loss-of-contact curve (solid) and the boundary of sliding-velocity reversal (dashed);
+    over two followers, follower 1's impacts band the periodic regions."""
+    if "follower" in ds.dims:
+        ds = ds.isel(follower=0)
     dims = list(ds["regime"].dims)
     xc, yc = _coordinate(ds, dims[0]), _coordinate(ds, dims[1])
     (fx, _), (fy, _) = display_scale(xc), display_scale(yc)

@@ -140,6 +140,10 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int = 1) -> dict:
     waits, so that Ctrl-C raises ``KeyboardInterrupt`` here at once: the kernel is told
     to stop through its abort flag and skips the points it has not begun.
     """
+    if spec.mechanism:   # Python runs, one point after another: Ctrl-C stops between two
+        from camdyn.sweeps import mechanism_run
+        prepared = mechanism_run.prepare_chunk(spec, chunk)
+        return mechanism_run.finish(prepared, mechanism_run.run_chunk(*mechanism_run.run_args(spec, prepared)))
     prepared = prepare_chunk(spec, chunk)
     abort = np.zeros(1, dtype=np.int64)
     result = {}
@@ -256,7 +260,10 @@ def _stop_workers(pool: cf.ProcessPoolExecutor) -> None:
 
 def _prepare_base(spec: SweepSpec):
     """The base system made ready for the kernel, or None where it cannot be (its points
-    are then refused one by one, with their reasons)."""
+    are then refused one by one, with their reasons) or where the sweep is over a
+    mechanism (which does not run the kernel)."""
+    if spec.mechanism:
+        return None
     try:
         return prepare(spec.base_system())
     except CamdynError:
@@ -351,6 +358,18 @@ def _chunk_size(spec: SweepSpec, chunk: int) -> int:
     return min(spec.chunk, spec.points - chunk * spec.chunk)
 
 
+def _chunk_task(spec: SweepSpec, chunk: int, threads: int) -> tuple:
+    """``(function, arguments, preparation, finish)`` of one chunk: what a worker runs,
+    prepared in the parent, and how its result is merged with the preparation (the
+    compiled kernel of the rocking cam-follower, or a mechanism's Python runs)."""
+    if spec.mechanism:
+        from camdyn.sweeps import mechanism_run
+        prepared = mechanism_run.prepare_chunk(spec, chunk)
+        return mechanism_run.run_chunk, mechanism_run.run_args(spec, prepared), prepared, mechanism_run.finish
+    prepared = prepare_chunk(spec, chunk)
+    return worker.run_chunk, _run_args(spec, prepared, threads), prepared, _finish
+
+
 def _drain(pool, n_workers, spec, todo, threads, store, advance) -> None:
     """Keep at most two chunks per worker in flight; the parent prepares each chunk just
     before it is submitted and saves each result as it arrives."""
@@ -360,11 +379,11 @@ def _drain(pool, n_workers, spec, todo, threads, store, advance) -> None:
         while queue or pending:
             while queue and len(pending) < 2 * n_workers:
                 c = queue.pop()
-                prepared = prepare_chunk(spec, c)
-                pending[pool.submit(worker.run_chunk, *_run_args(spec, prepared, threads))] = (c, prepared)
+                function, args, prepared, finish = _chunk_task(spec, c, threads)
+                pending[pool.submit(function, *args)] = (c, prepared, finish)
             finished, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
             for fut in finished:
-                c, prepared = pending.pop(fut)
+                c, prepared, finish = pending.pop(fut)
                 try:
                     result = fut.result()
                 except CamdynError:
@@ -372,7 +391,7 @@ def _drain(pool, n_workers, spec, todo, threads, store, advance) -> None:
                 except Exception as exc:  # a worker died or the code failed: keep what is done
                     raise SimulationError(f"chunk {c} failed on its worker ({type(exc).__name__}: {exc}); "
                                           f"finished chunks are kept, rerun to resume") from exc
-                store.save(c, _finish(prepared, result))
+                store.save(c, finish(prepared, result))
                 advance(c)
     finally:
         for fut in pending:

@@ -30,7 +30,17 @@ KINEMATIC_REGIMES = {0: "contact kept", 1: "contact kept, vr reversal", 2: "cont
 
 
 def _point_system(spec: SweepSpec, index: int):
-    return spec.base_system().with_values(**spec.point_values(index))
+    """The cam-follower of point ``index``: over a mechanism, its follower 1 with the
+    point's ``system.`` values (the rigid pivot at the prescribed starting speed, the
+    reference inverse kinematics gives)."""
+    return _with_values(spec, spec.point_values(index))
+
+
+def _with_values(spec: SweepSpec, values: dict):
+    if not spec.mechanism:
+        return spec.base_system().with_values(**values)
+    own = {key[len("system."):]: value for key, value in values.items() if key.startswith("system.")}
+    return spec.base_system().with_values(**own)
 
 
 def kinematic_regimes(spec: SweepSpec, points: int = 512) -> xr.DataArray:
@@ -55,14 +65,14 @@ def loss_of_contact_curve(spec: SweepSpec, points: int = 512) -> xr.DataArray | 
     (and the map has two dimensions); None otherwise."""
     dims = [d for d, _ in spec.dimensions]
     keys = {v.dimension: v.key for v in spec.vary}
-    speed_dims = [d for d in dims if keys.get(d) == "motion.speed"]
+    speed_dims = [d for d in dims if keys.get(d) in ("motion.speed", "system.motion.speed")]
     if len(dims) != 2 or len(speed_dims) != 1:
         return None
     other = [d for d in dims if d != speed_dims[0]][0]
     values = [v for v in spec.vary if v.dimension == other]
     curve = []
     for j in range(len(values[0].values)):
-        system = spec.base_system().with_values(**{v.key: v.values[j] for v in values})
+        system = _with_values(spec, {v.key: v.values[j] for v in values})
         try:
             curve.append(loss_of_contact_speed(system, points=points))
         except CamdynError:
@@ -92,7 +102,7 @@ def regime_map(spec: SweepSpec, **run) -> xr.Dataset:
     """Run the sweep of ``spec`` (``run``: keywords of :func:`camdyn.sweeps.run_sweep`), add
     the inverse-kinematics regime and loss-of-contact curve, and rewrite the result file."""
     from camdyn.sweeps import run_sweep
-    needed = {"regime", "impacts", "residual"}
+    needed = {"regime", "impacts"} if spec.mechanism else {"regime", "impacts", "residual"}
     if not needed <= set(spec.metrics):
         raise CamdynError(f"a regime map needs the metrics {sorted(needed)}")
     ds = run_sweep(spec, **run)
