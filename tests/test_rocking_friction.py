@@ -379,3 +379,16 @@ def test_the_example_runs_on_the_command_line(tmp_path):
     assert saved["pivot_force_x"].attrs["units"] == "N" and saved["contact_moment"].attrs["units"] == "N*m"
     status, out, err = run("simulate", EXAMPLE, "--set", "friction.static=-1")
     assert status == 2 and "friction.static must not be negative" in err + out and "Traceback" not in err + out
+
+
+def test_a_run_that_ends_on_a_dwell_completes():
+    # The example's arm without friction (system 4) over exactly 3 revolutions at 500 rpm:
+    # its last step, on the dwell, was exact in DOP853's fifth-order estimate with a third-
+    # order estimate that underflowed, and the error norm's 0/0 raised ZeroDivisionError.
+    from camdyn.io.rocking_config import load_rocking
+    follower, _ = load_rocking(EXAMPLE, {})
+    speed = 500.0 * 2.0 * math.pi / 60.0
+    for duration in (0.36, 0.3599):
+        ds = simulate_rocking(follower, speed, duration, sample_rate=20e3)
+        assert np.isfinite(ds["psi"].values).all()
+        assert ds["time"].values[-1] == pytest.approx(duration, abs=1e-12)
