@@ -1,0 +1,87 @@
+"""Continuation against the brute-force bifurcation diagram of the chapter 3 impact rig
+(e/rc = 0.2) in its periodic windows between the loss of contact (6.9 Hz) and 14 Hz and
+above 17 Hz: a sweep (the `camdyn bifurcation` machinery, stroboscopic Poincare points once
+per cam revolution after a transient) computed here at the shooting tolerance, and the
+branches found by continuation from a transient at a speed inside the window.
+
+Near 8 Hz the diagram (from rest) is period 1 with two impacts per revolution from 8.0 to
+8.3 Hz, irregular at 7.9 Hz and period 2 at 8.4 Hz: continuation finds the two-impact
+branch turning at a fold between 7.9 and 8.0 Hz and doubling between 8.3 and 8.4 Hz, and
+its stable orbits have the diagram's Poincare points."""
+
+import numpy as np
+import pytest
+
+# Hz; the fold (7.948 Hz) and the doubling (8.370 Hz) lie 0.03 Hz or more from each
+SPEEDS = np.array([7.9, 8.0, 8.2, 8.3, 8.4])
+
+
+def _diagram(speeds, tmp_path, revolutions=150, discard=100):
+    from camdyn.sweeps import run_sweep, spec_from_dict
+    # the shooting runs' tolerances, so that the Poincare points carry no integration error
+    # near 1e-6 rad; 100 revolutions of transient: the slowest-decaying stable orbit at these
+    # speeds has |mu| = 0.77 (8.35 Hz), 0.77^100 = 5e-12
+    table = {"system": {"source": "sundar2014-impact", "set": {}},
+             "vary": [{"key": "motion.speed", "values": [float(v) for v in speeds]}],
+             "run": {"revolutions": revolutions, "discard": discard, "rtol": 1e-10, "atol": 1e-12},
+             "metrics": {"names": ["poincare", "regime", "impacts"]},
+             "output": {"path": str(tmp_path / "diagram.nc")}}
+    return run_sweep(spec_from_dict(table, name="diagram"), workers=0, progress=False).load()
+
+
+def _section(problem, orbit):
+    """alpha [rad] at each cam revolution of ``orbit``, sorted."""
+    from camdyn.continuation.results import _sections
+    return np.sort(_sections(problem, orbit))
+
+
+@pytest.fixture(scope="module")
+def two_impact_window(tmp_path_factory):
+    import camdyn
+    from camdyn.continuation.branches import continue_orbits
+    from camdyn.continuation.results import switch_doublings, trace_branch
+    diagram = _diagram(SPEEDS, tmp_path_factory.mktemp("sweep"))
+    system = camdyn.load_system("sundar2014-impact")
+    problem, up = trace_branch(system, "motion.speed", 8.2, 8.5, transient=100, step=0.02)
+    down = continue_orbits(problem, up.orbits[0], 7.85, step=0.02, max_step=0.1)
+    doubled = switch_doublings(problem, up, 8.5, levels=1)
+    return diagram, problem, up, down, doubled
+
+
+def test_the_fold_and_the_doubling_lie_where_the_diagram_changes(two_impact_window):
+    diagram, _, up, down, doubled = two_impact_window
+    regime, period = diagram["regime"].values, diagram["period"].values
+    impacts = diagram["impacts_per_revolution"].values
+    # the diagram: irregular at 7.9 Hz, period 1 with 2 impacts per revolution at 8.0-8.3, period 2 at 8.4
+    assert regime[0] == 3 and period[0] == 0, (regime, period)
+    assert np.all(regime[1:] == 2) and period[1:].tolist() == [1, 1, 1, 2], period
+    assert np.allclose(impacts[1:4], 2.0), impacts
+    assert up.orbits[0].impacts_per_period == 2 and up.orbits[0].stable
+    folds = [b.parameter for b in down.bifurcations if b.kind == "fold"]
+    assert len(folds) == 1 and SPEEDS[0] < folds[0] < SPEEDS[1], [(b.kind, b.parameter) for b in down.bifurcations]
+    doublings = [b.parameter for b in up.bifurcations if b.kind == "period-doubling"]
+    assert len(doublings) == 1 and SPEEDS[3] < doublings[0] < SPEEDS[4], [(b.kind, b.parameter)
+                                                                             for b in up.bifurcations]
+    # past the fold the branch comes back unstable (a multiplier above +1): the brute force cannot see it
+    after = [o for o in down.orbits if not o.stable]
+    assert after and all(np.max(np.abs(o.multipliers)) > 1.0 for o in after)
+    assert len(doubled) == 1 and doubled[0].orbits[-1].periods == 2
+
+
+def test_stable_orbits_have_the_diagrams_poincare_points(two_impact_window):
+    from camdyn.continuation import find_orbit
+    diagram, problem, up, down, doubled = two_impact_window
+    worst, compared = 0.0, 0
+    for i, speed in enumerate(SPEEDS):
+        period = int(diagram["period"].values[i])
+        if period == 0:
+            continue
+        branch = up if period == 1 else doubled[0]
+        stable = [o for o in branch.orbits + down.orbits if o.stable and o.periods == period]
+        nearest = min(stable, key=lambda o: abs(o.parameter - speed))
+        orbit = find_orbit(problem, start=nearest.state, value=speed, periods=period)
+        assert orbit.stable and orbit.periods == period
+        seen = np.sort(diagram["poincare_alpha"].values[i, -period:])
+        worst = max(worst, float(np.max(np.abs(_section(problem, orbit) - seen))))
+        compared += 1
+    assert compared == 4 and worst < 1e-6, worst
