@@ -85,3 +85,55 @@ def test_stable_orbits_have_the_diagrams_poincare_points(two_impact_window):
         worst = max(worst, float(np.max(np.abs(_section(problem, orbit) - seen))))
         compared += 1
     assert compared == 4 and worst < 1e-6, worst
+
+
+# Hz; the diagram (from rest) is period 2 with one impact per two revolutions from 21.0 to
+# 27.5 Hz, period 4 from 27.6 to 28.5 Hz and irregular at 28.6 Hz
+HIGH = np.array([24.0, 27.4, 27.7, 28.4, 28.6])
+
+
+@pytest.fixture(scope="module")
+def period_two_window(tmp_path_factory):
+    import camdyn
+    from camdyn.continuation.results import switch_doublings, trace_branch
+    # 300 revolutions of transient: the slowest-decaying orbit here, the period-2 orbit at
+    # 27.4 Hz, has |mu| = 0.861 over its 2 revolutions (measured), 0.861^150 = 2e-10
+    diagram = _diagram(HIGH, tmp_path_factory.mktemp("sweep"), revolutions=340, discard=300)
+    problem, branch = trace_branch(camdyn.load_system("sundar2014-impact"), "motion.speed", 24.0, 28.6, periods=2,
+                                   transient=100, step=0.02)
+    doubled = switch_doublings(problem, branch, 28.6, levels=1)
+    return diagram, problem, branch, doubled
+
+
+def test_period_two_window_doubles_where_the_diagram_does(period_two_window):
+    diagram, problem, branch, doubled = period_two_window
+    period, regime = diagram["period"].values, diagram["regime"].values
+    assert period.tolist() == [2, 2, 4, 4, 0] and regime[-1] == 3, (period, regime)
+    assert np.allclose(diagram["impacts_per_revolution"].values[:-1], 0.5)
+    assert branch.orbits[0].periods == 2 and branch.orbits[0].impacts_per_period == 1 and branch.orbits[0].stable
+    doublings = [b.parameter for b in branch.bifurcations if b.kind == "period-doubling"]
+    assert len(doublings) == 1 and HIGH[1] < doublings[0] < HIGH[2], [(b.kind, b.parameter)
+                                                                       for b in branch.bifurcations]
+    assert len(doubled) == 1 and doubled[0].orbits[-1].periods == 4
+    # the period-4 branch loses its stability between the diagram's last period-4 speed and
+    # its first irregular one
+    lost = [b.parameter for b in doubled[0].bifurcations if b.kind in ("period-doubling", "multiplier-jump")]
+    assert lost and HIGH[3] < lost[0] < HIGH[4], [(b.kind, b.parameter) for b in doubled[0].bifurcations]
+    # the period-2 orbit past the doubling is unstable, off the diagram's points
+    last = branch.orbits[-1]
+    assert not last.stable and last.parameter == pytest.approx(28.6)
+
+
+def test_period_two_and_four_orbits_have_the_diagrams_poincare_points(period_two_window):
+    from camdyn.continuation import find_orbit
+    diagram, problem, branch, doubled = period_two_window
+    worst = 0.0
+    for i, speed in enumerate(HIGH[:-1]):
+        period = int(diagram["period"].values[i])
+        source = branch if period == 2 else doubled[0]
+        nearest = min((o for o in source.orbits if o.stable), key=lambda o: abs(o.parameter - speed))
+        orbit = find_orbit(problem, start=nearest.state, value=speed, periods=period)
+        assert orbit.stable and orbit.periods == period, (speed, orbit.multipliers)
+        seen = np.sort(diagram["poincare_alpha"].values[i, -period:])
+        worst = max(worst, float(np.max(np.abs(_section(problem, orbit) - seen))))
+    assert worst < 1e-6, worst
