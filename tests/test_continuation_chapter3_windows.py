@@ -137,3 +137,33 @@ def test_period_two_and_four_orbits_have_the_diagrams_poincare_points(period_two
         seen = np.sort(diagram["poincare_alpha"].values[i, -period:])
         worst = max(worst, float(np.max(np.abs(_section(problem, orbit) - seen))))
     assert worst < 1e-6, worst
+
+
+def test_one_impact_orbit_is_an_attractor_down_to_its_grazing_and_gone_past_it():
+    """The one-impact period-1 branch, followed down from 9.7 Hz, grazes (a second,
+    low-velocity impact appears) between 9.55 and 9.57 Hz. Plain runs started near its
+    orbit settle back onto it at 9.57 Hz (where the diagram from rest shows other motion,
+    period 3 at 9.6 Hz: the two attractors coexist), and leave it at 9.55 Hz, past the
+    grazing, where only the unstable two-impact orbit (a multiplier from -15 down to -190) continues."""
+    import camdyn
+    from camdyn.continuation.orbits import shoot
+    from camdyn.continuation.results import trace_branch
+    problem, branch = trace_branch(camdyn.load_system("sundar2014-impact"), "motion.speed", 9.7, 9.5,
+                                   transient=100, step=0.01)
+    grazings = [b.parameter for b in branch.bifurcations if b.kind == "grazing"]
+    assert len(grazings) == 1 and 9.55 < grazings[0] < 9.57, [(b.kind, b.parameter) for b in branch.bifurcations]
+    before = [o for o in branch.orbits if o.impacts_per_period == 1]
+    after = [o for o in branch.orbits if o.impacts_per_period != 1]
+    assert branch.orbits[:len(before)] == before and min(o.parameter for o in before) > grazings[0] - 1e-6
+    assert all(o.stable for o in before) and branch.orbits[-1].parameter == pytest.approx(9.5)
+    assert all(o.impacts_per_period == 2 and np.min(o.multipliers.real) < -1.0 for o in after)
+    start = min(before, key=lambda o: o.parameter)                    # the orbit nearest the grazing
+    nudged = start.state + np.array([1e-4, 1e-3])                     # [rad, rad/s]
+    orbit_957 = min(before, key=lambda o: abs(o.parameter - 9.57))
+    from camdyn.continuation import find_orbit
+    orbit_957 = find_orbit(problem, start=orbit_957.state, value=9.57)
+    settled = shoot(problem, nudged, 9.57, 150)
+    assert np.max(np.abs(settled - orbit_957.state)) < 1e-8, settled - orbit_957.state
+    # past the grazing the runs from the same start wander: no period-1 point after 150 revolutions
+    x = shoot(problem, nudged, 9.55, 150)
+    assert np.max(np.abs(shoot(problem, x, 9.55, 1) - x)) > 1e-3
