@@ -104,8 +104,9 @@ def _segment(system, first: float, last: float, periods: int = 1, levels: int = 
             "cpu_s": time.process_time() - c,
             "points": len(branch.orbits), "reached_hz": branch.orbits[-1].parameter, "stopped": branch.stopped,
             "bifurcations": [(b.kind, b.parameter) for b in branch.bifurcations],
-            "doubled_branches": [{"points": len(b.orbits), "periods": b.orbits[0].periods, "from_hz": b.orbits[0].parameter,
-                                  "to_hz": b.orbits[-1].parameter, "stopped": b.stopped,
+            "doubled_branches": [{"points": len(b.orbits), "periods": b.orbits[0].periods,
+                                  "from_hz": b.orbits[0].parameter, "to_hz": b.orbits[-1].parameter,
+                                  "stopped": b.stopped,
                                   "bifurcations": [(x.kind, x.parameter) for x in b.bifurcations]}
                                  for b in doubled]}
 
