@@ -7,7 +7,11 @@ branches found by continuation from a transient at a speed inside the window.
 Near 8 Hz the diagram (from rest) is period 1 with two impacts per revolution from 8.0 to
 8.3 Hz, irregular at 7.9 Hz and period 2 at 8.4 Hz: continuation finds the two-impact
 branch turning at a fold between 7.9 and 8.0 Hz and doubling between 8.3 and 8.4 Hz, and
-its stable orbits have the diagram's Poincare points."""
+its stable orbits have the diagram's Poincare points. From 21 to 27.5 Hz the diagram is
+period 2 (one impact per two revolutions), period 4 from 27.6 to 28.5 Hz: the period-2
+branch doubles, and the period-4 branch loses its stability, between the diagram's speeds
+where it changes. Near 9.56 Hz the one-impact branch grazes where plain runs started on
+its orbit stop returning to it (the diagram from rest has already left it there)."""
 
 import numpy as np
 import pytest
