@@ -88,7 +88,7 @@ def test_stable_orbits_have_the_diagrams_poincare_points(two_impact_window):
         seen = np.sort(diagram["poincare_alpha"].values[i, -period:])
         worst = max(worst, float(np.max(np.abs(_section(problem, orbit) - seen))))
         compared += 1
-    assert compared == 4 and worst < 1e-6, worst
+    assert compared == 4 and worst < 1e-8, worst          # measured 2.3e-11 rad (target 1e-6)
 
 
 # Hz; the diagram (from rest) is period 2 with one impact per two revolutions from 21.0 to
@@ -140,7 +140,7 @@ def test_period_two_and_four_orbits_have_the_diagrams_poincare_points(period_two
         assert orbit.stable and orbit.periods == period, (speed, orbit.multipliers)
         seen = np.sort(diagram["poincare_alpha"].values[i, -period:])
         worst = max(worst, float(np.max(np.abs(_section(problem, orbit) - seen))))
-    assert worst < 1e-6, worst
+    assert worst < 1e-8, worst                             # measured 1.4e-10 rad (target 1e-6)
 
 
 def test_one_impact_orbit_is_an_attractor_down_to_its_grazing_and_gone_past_it():
