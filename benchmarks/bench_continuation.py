@@ -10,9 +10,13 @@ continuation from 11.55 to 20 Hz. Wall time and this process's CPU time, best of
 less.
 
 Branches against brute force: the chapter 3 rig (``sundar2014-impact``, e/rc = 0.2) by
-continuation from 5 Hz towards 30 Hz (as far as it goes: it stops at the loss of contact
-near 6.9 Hz) and from 14 to 17 Hz, with the bifurcations located and the period-2
-branches switched onto at the period doublings (``switch_doublings``, one level),
+continuation, each branch from a transient at a speed inside a periodic window of the
+brute-force diagram, with the bifurcations located and the period-doubled branches
+switched onto at the period doublings (``switch_doublings``): from 5 Hz towards 30 Hz (it
+stops at the loss of contact near 6.9 Hz); the two-impact branch from 8.2 Hz down past its
+fold and up past its doubling; the one-impact branch from 14 Hz down to its grazing near
+9.57 Hz and up to 17.45 Hz with two levels of doublings; the period-2 branch (one impact
+per two revolutions) from 24 Hz down to 20.9 Hz and up to 28.6 Hz with its doubling;
 against the 400-speed brute-force diagram from 5 to 30 Hz (300 revolutions each, 200
 discarded, as ``camdyn bifurcation`` and benchmarks/bench_sweep.py run it) on 2 local
 workers (their CPU time from ``getrusage``).
@@ -86,19 +90,23 @@ def one_orbit(repeat: int) -> dict:
     return out
 
 
-def _segment(system, first: float, last: float) -> dict:
-    """The branch from ``first`` to ``last`` [Hz] as far as continuation follows it, with
-    the period-2 branches switched onto at its doublings: points, where and why it
-    stopped, its bifurcations, and the wall and CPU time [s]."""
+def _segment(system, first: float, last: float, periods: int = 1, levels: int = 1) -> dict:
+    """The period-``periods`` branch from ``first`` to ``last`` [Hz] as far as continuation
+    follows it, with the period-doubled branches switched onto at its doublings (down to
+    ``levels`` doublings): points, where and why it stopped, its bifurcations, and the
+    wall and CPU time [s]."""
     from camdyn.continuation.results import switch_doublings, trace_branch
     t, c = time.perf_counter(), time.process_time()
-    problem, branch = trace_branch(system, "motion.speed", first, last, transient=100, step=0.02, max_points=500)
-    doubled = switch_doublings(problem, branch, last, levels=1, max_points=500)
-    return {"from_hz": first, "to_hz": last, "wall_s": time.perf_counter() - t, "cpu_s": time.process_time() - c,
+    problem, branch = trace_branch(system, "motion.speed", first, last, periods=periods, transient=100, step=0.02,
+                                   max_points=500)
+    doubled = switch_doublings(problem, branch, last, levels=levels, max_points=500)
+    return {"from_hz": first, "to_hz": last, "periods": periods, "wall_s": time.perf_counter() - t,
+            "cpu_s": time.process_time() - c,
             "points": len(branch.orbits), "reached_hz": branch.orbits[-1].parameter, "stopped": branch.stopped,
             "bifurcations": [(b.kind, b.parameter) for b in branch.bifurcations],
-            "doubled_branches": [{"points": len(b.orbits), "from_hz": b.orbits[0].parameter,
-                                  "to_hz": b.orbits[-1].parameter, "stopped": b.stopped,
+            "doubled_branches": [{"points": len(b.orbits), "periods": b.orbits[0].periods,
+                                  "from_hz": b.orbits[0].parameter, "to_hz": b.orbits[-1].parameter,
+                                  "stopped": b.stopped,
                                   "bifurcations": [(x.kind, x.parameter) for x in b.bifurcations]}
                                  for b in doubled]}
 
@@ -109,7 +117,11 @@ def chapter3(skip_sweep: bool) -> dict:
     from camdyn.continuation.results import trace_branch
     system = camdyn.load_system("sundar2014-impact")
     trace_branch(system, "motion.speed", 5.0, 5.5, transient=50, max_points=3)        # compiled once
-    out = {"segments": [_segment(system, 5.0, 30.0), _segment(system, 14.0, 17.0)]}
+    out = {"segments": [_segment(system, 5.0, 30.0), _segment(system, 8.2, 7.85), _segment(system, 8.2, 8.5),
+                        _segment(system, 14.0, 9.5), _segment(system, 14.0, 17.45, levels=2),
+                        _segment(system, 24.0, 20.9, periods=2), _segment(system, 24.0, 28.6, periods=2)]}
+    out["total_wall_s"] = sum(item["wall_s"] for item in out["segments"])
+    out["total_cpu_s"] = sum(item["cpu_s"] for item in out["segments"])
     if not skip_sweep:
         from camdyn.sweeps import run_sweep, spec_from_dict
         with tempfile.TemporaryDirectory() as folder:
