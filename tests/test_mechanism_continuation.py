@@ -26,11 +26,10 @@ from camdyn.params.config import load_system
 from camdyn.simulation.flexible_pivot import FlexiblePivotRig
 from camdyn.simulation.mechanisms import CamDrive
 from camdyn.simulation.two_followers import TwoFollowerRig, drum_brake
-from camdyn.systems import registry as systems
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "mechanisms"
-#: The chapter 3 impact rig at 14 Hz: one impact-free orbit in contact
-SPEED = 14.0
+#: The chapter 4 friction rig (11.55 Hz), in sustained contact: a very stable orbit
+FRICTION = "sundar2014-friction"
 
 
 def plain_end(problem, x, value, periods=1, rtol=1e-12):
@@ -59,23 +58,155 @@ def difference_monodromy(problem, orbit, steps):
     return matrix
 
 
-@pytest.fixture(scope="module")
-def impact_rig():
-    return load_system("sundar2014-impact").with_values(**{"motion.speed": SPEED})
+def prescribed_pair():
+    """The drum brake (two identical followers opposite each other, gravity off) on a cam
+    held at 11.55 Hz."""
+    rig = drum_brake()
+    return TwoFollowerRig(rig.system, rig.second, rig.placement, CamDrive(2e-4, kind="prescribed"))
 
 
 @pytest.fixture(scope="module")
-def rigid_orbit(impact_rig):
-    return find_orbit(system_problem(impact_rig), transient=60)
+def pair_problem():
+    return mechanism_problem(prescribed_pair())
 
 
 @pytest.fixture(scope="module")
-def pivot_problem(impact_rig):
-    """A soft bearing with little damping: its multipliers are of order one."""
-    kp = 2e7
-    return mechanism_problem(FlexiblePivotRig(impact_rig, kp, 2.0 * 0.002 * math.sqrt(kp * impact_rig.follower.mass)))
+def pair_orbit(pair_problem):
+    return find_orbit(pair_problem, transient=30)
 
 
 @pytest.fixture(scope="module")
-def pivot_orbit(pivot_problem):
-    return find_orbit(pivot_problem, transient=60)
+def friction_rig():
+    return load_system(FRICTION)
+
+
+@pytest.fixture(scope="module")
+def rigid_orbit(friction_rig):
+    return find_orbit(system_problem(friction_rig), transient=50)
+
+
+@pytest.fixture(scope="module")
+def stiff_problem(friction_rig):
+    """A bearing of 1e10 N/m (5 % damping): the rigid pivot's limit."""
+    kp = 1e10
+    damping = 2.0 * 0.05 * math.sqrt(kp * friction_rig.follower.mass)
+    return mechanism_problem(FlexiblePivotRig(friction_rig, kp, damping))
+
+
+@pytest.fixture(scope="module")
+def stiff_orbit(stiff_problem, rigid_orbit):
+    """Newton's method from the rigid pivot's orbit, the bearing at rest."""
+    return find_orbit(stiff_problem, start=np.r_[rigid_orbit.state, 0.0, 0.0, 0.0, 0.0])
+
+
+def test_a_stiff_bearing_gives_the_rigid_pivots_orbit(rigid_orbit, stiff_orbit):
+    """As the bearing stiffens the follower's orbit tends to the rigid pivot's (its
+    deflection, about Fn / kp, goes to zero): at 1e10 N/m, alpha and alpha_dot at the
+    section agree with the rigid pivot's orbit to 1e-5; the bearing's own multipliers
+    (its modes at tens of kHz, damped over a cam period) are negligible and the
+    follower's two approach the rigid pivot's (both pairs below 1e-4 in modulus: the
+    rig's orbit is strongly attracting)."""
+    assert stiff_orbit.state.size == 6 and stiff_orbit.residual < 1e-9
+    assert np.max(np.abs(stiff_orbit.state[:2] - rigid_orbit.state)) < 1e-5
+    assert np.max(np.abs(stiff_orbit.state[2:])) < 1e-7                     # u, v [m], u', v' [m/s] tiny
+    follower, bearing = stiff_orbit.multipliers[:2], stiff_orbit.multipliers[2:]
+    assert np.max(np.abs(bearing)) < 1e-12
+    assert np.max(np.abs(rigid_orbit.multipliers)) < 1e-4 and np.max(np.abs(follower)) < 1e-4
+    assert abs(np.abs(follower[0]) - np.abs(rigid_orbit.multipliers[0])) < 3e-5
+
+
+def test_the_stiff_bearings_orbit_closes_over_several_periods(stiff_problem, stiff_orbit):
+    """A plain run of 3 cam periods from the found orbit returns to it within the
+    shooting's convergence test, 1e-9 (1 + |x|) in each unknown's SI unit."""
+    end = plain_end(stiff_problem, stiff_orbit.state, stiff_orbit.parameter, periods=3, rtol=1e-11)
+    assert np.max(np.abs(end - stiff_orbit.state) / (1.0 + np.abs(stiff_orbit.state))) < 1e-9
+
+
+def test_each_of_two_identical_followers_rides_the_single_followers_orbit(pair_orbit):
+    """On a cam held at its speed the followers do not feel each other: follower 1's
+    orbit is the single follower's (``system_problem``), follower 2's the same orbit half
+    a period later (it sits opposite, the cam turned by pi in its frame), both to 1e-6;
+    the monodromy matrix has no coupling block."""
+    system = prescribed_pair().system
+    single = system_problem(system)
+    period = single.build(single.value)[1]
+    first = find_orbit(single, transient=30)
+    second = find_orbit(dataclasses.replace(single, t_start=0.5 * period), transient=30)
+    assert np.max(np.abs(pair_orbit.state[:2] - first.state)) < 1e-6
+    assert np.max(np.abs(pair_orbit.state[2:] - second.state)) < 1e-6
+    assert np.all(pair_orbit.monodromy[:2, 2:] == 0.0) and np.all(pair_orbit.monodromy[2:, :2] == 0.0)
+
+
+def test_the_multipliers_are_those_of_a_difference_monodromy(pair_problem, pair_orbit):
+    """The multipliers of the two followers' orbit against the eigenvalues of a monodromy
+    matrix from central differences of whole plain runs (steps 1e-6 rad and 2e-5 rad/s):
+    each to 2 % of its modulus (measured 0.2-0.4 %; the multipliers are of order 1e-5,
+    the orbit is strongly attracting)."""
+    matrix = difference_monodromy(pair_problem, pair_orbit, np.array([1e-6, 2e-5, 1e-6, 2e-5]))
+    expected = np.linalg.eigvals(matrix)
+    for mu in pair_orbit.multipliers:
+        assert np.min(np.abs(expected - mu)) < 0.02 * abs(mu)
+
+
+def test_the_pairs_orbit_closes_over_several_periods(pair_problem, pair_orbit):
+    """A plain run of 5 cam periods from the found orbit returns to it to 1e-9."""
+    end = plain_end(pair_problem, pair_orbit.state, pair_orbit.parameter, periods=5)
+    assert np.max(np.abs(end - pair_orbit.state) / (1.0 + np.abs(pair_orbit.state))) < 1e-9
+
+
+def test_a_short_continuation_in_the_cam_speed(pair_problem, pair_orbit):
+    """From 11.55 to 11.75 Hz: every orbit on the branch closes under a plain run of 2
+    periods at its own speed, and the speed moves on."""
+    branch = continue_orbits(pair_problem, pair_orbit, 11.75, step=0.01, max_step=0.05, max_points=5)
+    assert len(branch.orbits) >= 3 and branch.orbits[-1].parameter > 11.6
+    for orbit in branch.orbits:
+        end = plain_end(pair_problem, orbit.state, orbit.parameter, periods=2)
+        assert np.max(np.abs(end - orbit.state) / (1.0 + np.abs(orbit.state))) < 1e-8
+
+
+def test_the_problem_refuses_what_has_no_fixed_period():
+    rig = drum_brake()
+    with pytest.raises(ParameterError, match="no fixed period"):
+        mechanism_problem(rig)                                              # a torque-driven shaft
+    with pytest.raises(ParameterError, match="driven cam has no fixed period"):
+        mechanism_problem(load_system(FRICTION))
+    with pytest.raises(ParameterError, match="unknown parameter"):
+        mechanism_problem(prescribed_pair(), "cam.nonsense")
+    with pytest.raises(ParameterError, match="constant speed"):
+        mechanism_problem(prescribed_pair(), "motion.frequency")
+
+
+def run(argv):
+    """``camdyn ARGV``: its exit status, standard output and standard error."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        status = main([str(a) for a in argv])
+    return status, out.getvalue(), err.getvalue()
+
+
+@pytest.mark.parametrize("source, arguments, message", [
+    ("drum_brake.toml", [], "no fixed period"),
+    ("driven_cam.toml", [], "driven cam has no fixed period"),
+    ("two_followers_prescribed.toml", ["--parameter", "pivot.stiffness"], "flexible pivot only"),
+    ("two_followers_prescribed.toml", ["--brute-force", "5"], "not offered for a mechanism"),
+    ("flexible_pivot.toml", ["--set", "pivot.stiffness=-1N/m"], "pivot.stiffness"),
+])
+def test_the_cli_refuses_in_one_line(tmp_path, monkeypatch, source, arguments, message):
+    monkeypatch.chdir(tmp_path)
+    status, out, err = run(["continue", EXAMPLES / source, "--from", "11.55Hz", "--to", "11.6Hz", *arguments])
+    assert status == 2, (out, err)
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error:") and message in lines[0], lines
+    assert not any(tmp_path.iterdir())
+
+
+def test_the_cli_continues_two_followers(tmp_path):
+    out = tmp_path / "branch.nc"
+    status, text, err = run(["continue", EXAMPLES / "two_followers_prescribed.toml", "--from", "11.55Hz", "--to",
+                             "11.6Hz", "--max-points", "4", "--step", "0.002", "--out", out, "--json"])
+    assert status == 0, err
+    doc = json.loads(text)
+    assert doc["summary"]["units"] == "Hz" and doc["summary"]["points"] >= 2
+    first = doc["branches"][0][0]
+    assert len(first["state"]) == 4 and len(first["multipliers"]) == 4 and first["stable"]
+    assert out.stat().st_size > 0
