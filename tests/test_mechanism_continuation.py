@@ -95,8 +95,8 @@ def stiff_problem(friction_rig):
 
 @pytest.fixture(scope="module")
 def stiff_orbit(stiff_problem, rigid_orbit):
-    """Newton's method from the rigid pivot's orbit, the bearing at rest."""
-    return find_orbit(stiff_problem, start=np.r_[rigid_orbit.state, 0.0, 0.0, 0.0, 0.0])
+    """Newton's method from the rigid pivot's orbit, the bearing at its static deflection."""
+    return find_orbit(stiff_problem, start=np.r_[rigid_orbit.state, stiff_problem.template[2:6]])
 
 
 def test_a_stiff_bearing_gives_the_rigid_pivots_orbit(rigid_orbit, stiff_orbit):
