@@ -57,7 +57,6 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     continued in motion.speed, its orbits taken at cam angle 0. A mechanism file (the
     flexible pivot, or two followers with drive.kind = 'prescribed') is continued in a
     system key or, for the flexible pivot, pivot.stiffness or pivot.damping."""
-    from camdyn.continuation.problem import parameter_unit
     from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset, switch_doublings
 
     check_outputs(netcdf=out, figure=plot, force=force)
@@ -73,20 +72,7 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         continue_translating_command(source, set_, parameter, start, stop, period, step, max_points, transient,
                                      doublings, brute_force, plot, out, quiet, json_)
         return
-    from camdyn.params.mechanism import is_mechanism
-
-    mechanism = is_mechanism(source)
-    if mechanism:
-        from camdyn.io.mechanism_config import load_mechanism, mechanism_rig
-        from camdyn.params.config import parse_assignments
-
-        if brute_force:
-            raise ParameterError("--brute-force sweeps the cam-follower; it is not offered for a mechanism")
-        system = mechanism_rig(load_mechanism(source, parse_assignments(set_)))
-        unit = _mechanism_unit(system, parameter)
-    else:
-        system = load_source(source, set_)
-        unit = parameter_unit(system, parameter)
+    system, unit, mechanism = _load(source, set_, parameter, brute_force)
     first, last = _value(start, "--from", unit), _value(stop, "--to", unit)
     if first == last:
         raise ParameterError("--from and --to must differ")
@@ -152,6 +138,24 @@ def _brute_force(source, set_, parameter, first, last, count, quiet):
         diagram = result.load()
         result.close()
     return diagram
+
+
+def _load(source, set_, parameter, brute_force):
+    """``(system, unit, mechanism)``: the cam-follower, or a mechanism's rig
+    (``mechanism`` True), and the continued parameter's unit."""
+    from camdyn.continuation.problem import parameter_unit
+    from camdyn.params.mechanism import is_mechanism
+
+    if not is_mechanism(source):
+        system = load_source(source, set_)
+        return system, parameter_unit(system, parameter), False
+    from camdyn.io.mechanism_config import load_mechanism, mechanism_rig
+    from camdyn.params.config import parse_assignments
+
+    if brute_force:
+        raise ParameterError("--brute-force sweeps the cam-follower; it is not offered for a mechanism")
+    rig = mechanism_rig(load_mechanism(source, parse_assignments(set_)))
+    return rig, _mechanism_unit(rig, parameter), True
 
 
 def _mechanism_unit(rig, parameter: str) -> str:
