@@ -54,8 +54,9 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     multipliers; folds, period doublings, Neimark-Sacker bifurcations, grazing, loss of
     contact and sliding reversal located on the way; the period-doubled branches
     followed (docs/continuation.md). A translating follower (the preset alzate) is
-    continued in motion.speed, its orbits taken at cam angle 0."""
-    from camdyn.continuation.problem import parameter_unit
+    continued in motion.speed, its orbits taken at cam angle 0. A mechanism file (the
+    flexible pivot, or two followers with drive.kind = 'prescribed') is continued in a
+    system key or, for the flexible pivot, pivot.stiffness or pivot.damping."""
     from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset, switch_doublings
 
     check_outputs(netcdf=out, figure=plot, force=force)
@@ -71,8 +72,7 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         continue_translating_command(source, set_, parameter, start, stop, period, step, max_points, transient,
                                      doublings, brute_force, plot, out, quiet, json_)
         return
-    system = load_source(source, set_)
-    unit = parameter_unit(system, parameter)
+    system, unit, mechanism = _load(source, set_, parameter, brute_force)
     first, last = _value(start, "--from", unit), _value(stop, "--to", unit)
     if first == last:
         raise ParameterError("--from and --to must differ")
@@ -86,7 +86,7 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     if brute_force and plot is None:
         raise ParameterError("--brute-force draws the diagram under the branches of --plot: give --plot")
     problem, branch = _trace(system, parameter, first, last, period, step, max_points, transient, quiet or json_,
-                             segments)
+                             segments, mechanism)
     branches = [branch, *switch_doublings(problem, branch, last, doublings, step, max_points)]
     records = [branch_records(problem, b) for b in branches]
     bifurcations = bifurcation_records(branches)
@@ -140,12 +140,46 @@ def _brute_force(source, set_, parameter, first, last, count, quiet):
     return diagram
 
 
-def _trace(system, parameter, first, last, period, step, max_points, transient, quiet, segments):
-    """The branch, with a progress bar over the parameter range unless ``quiet``."""
+def _load(source, set_, parameter, brute_force):
+    """``(system, unit, mechanism)``: the cam-follower, or a mechanism's rig
+    (``mechanism`` True), and the continued parameter's unit."""
+    from camdyn.continuation.problem import parameter_unit
+    from camdyn.params.mechanism import is_mechanism
+
+    if not is_mechanism(source):
+        system = load_source(source, set_)
+        return system, parameter_unit(system, parameter), False
+    from camdyn.io.mechanism_config import load_mechanism, mechanism_rig
+    from camdyn.params.config import parse_assignments
+
+    if brute_force:
+        raise ParameterError("--brute-force sweeps the cam-follower; it is not offered for a mechanism")
+    rig = mechanism_rig(load_mechanism(source, parse_assignments(set_)))
+    return rig, _mechanism_unit(rig, parameter), True
+
+
+def _mechanism_unit(rig, parameter: str) -> str:
+    """The unit of a mechanism's continued parameter (a bearing key or the system's)."""
+    from camdyn.continuation.mechanisms import BEARING_KEYS
+    from camdyn.continuation.problem import parameter_unit
+    from camdyn.simulation.flexible_pivot import FlexiblePivotRig
+
+    if parameter in BEARING_KEYS:
+        if not isinstance(rig, FlexiblePivotRig):
+            raise ParameterError(f"{parameter} is a key of the flexible pivot only")
+        return BEARING_KEYS[parameter]
+    return parameter_unit(rig.system, parameter)
+
+
+def _trace(system, parameter, first, last, period, step, max_points, transient, quiet, segments, mechanism=False):
+    """The branch, with a progress bar over the parameter range unless ``quiet``
+    (``system`` a mechanism's rig when ``mechanism``)."""
+    from camdyn.continuation.mechanisms import trace_mechanism
     from camdyn.continuation.results import trace_branch
 
+    trace = trace_mechanism if mechanism else trace_branch     # the same signature
     if quiet:
-        return trace_branch(system, parameter, first, last, period, step, max_points, transient, segments=segments)
+        return trace(system, parameter, first, last, period, step, max_points, transient, segments=segments)
     from rich.progress import Progress
 
     with Progress(console=err_console, transient=True) as bar:
@@ -153,5 +187,5 @@ def _trace(system, parameter, first, last, period, step, max_points, transient, 
 
         def progress(orbit):
             bar.update(task, completed=min(max((orbit.parameter - first) / (last - first), 0.0), 1.0))
-        return trace_branch(system, parameter, first, last, period, step, max_points, transient, progress=progress,
-                            segments=segments)
+        return trace(system, parameter, first, last, period, step, max_points, transient, progress=progress,
+                     segments=segments)

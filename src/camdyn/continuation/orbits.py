@@ -140,10 +140,8 @@ class Orbit:
     segment_states: np.ndarray | None = None
 
 
-def _full(problem: Problem, x: np.ndarray) -> np.ndarray:
-    y = problem.template.copy()
-    y[:problem.unknowns] = x
-    return y
+def _full(problem: Problem, x: np.ndarray, value: float) -> np.ndarray:
+    return problem.full_state(x, value)
 
 
 def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samples: int = 0) -> Flow:
@@ -160,7 +158,7 @@ def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samp
 def _variational(problem: Problem, p, period, x, value, t0, t1, samples) -> Flow:
     n = problem.template.size
     u = problem.unknowns
-    y0 = _full(problem, np.asarray(x, dtype=float))
+    y0 = _full(problem, np.asarray(x, dtype=float), value)
     count = max(samples, 2)
     times = np.linspace(t0, t1, count)
     start = np.concatenate([y0, np.eye(n).ravel()])
@@ -207,7 +205,7 @@ def shoot(problem: Problem, x, value: float, periods: int = 1) -> np.ndarray:
 
 
 def _plain(problem: Problem, p, period, x, value, t0, t1) -> np.ndarray:
-    y, _, _, counters = driver.integrate(problem.system_id, p, _full(problem, np.asarray(x, dtype=float)), t0, t1,
+    y, _, _, counters = driver.integrate(problem.system_id, p, _full(problem, x, value), t0, t1,
                                          np.array([t1]), problem.rtol, problem.atol, period / 32.0,
                                          driver.METHOD_DOP853, 50_000_000, 100_000, True)
     limits.check_run(counters, f"shooting run at {problem.name} = {value:g}")
@@ -224,7 +222,8 @@ def transient_state(problem: Problem, periods: int = 50, value: float | None = N
     p, period = problem.build(value)
     t0 = problem.t_start
     t1 = t0 + periods * period
-    y, _, _, counters = driver.integrate(problem.system_id, p, problem.template.copy(), t0, t1, np.array([t1]),
+    start = problem.full_state(problem.template[:problem.unknowns], value)
+    y, _, _, counters = driver.integrate(problem.system_id, p, start, t0, t1, np.array([t1]),
                                          problem.rtol * 100, problem.atol * 100, period / 32.0,
                                          driver.METHOD_DOP853, 50_000_000, 100_000, True)
     limits.check_run(counters, "transient run")
@@ -238,7 +237,8 @@ def make_orbit(problem: Problem, x, value, periods, run: Flow, iterations, resid
     values = values[np.argsort(-np.abs(values), kind="stable")]
     p, period = problem.build(value)
     force, sliding = contact_margins(problem.system_id, p, run.times, run.states, run.modes)
-    return Orbit(np.asarray(x, float).copy(), _full(problem, x), float(value), float(periods * period), periods, values,
+    return Orbit(np.asarray(x, float).copy(), _full(problem, x, value), float(value), float(periods * period),
+                 periods, values,
                  bool(np.all(np.abs(values) < 1.0 - STABILITY_MARGIN)), run.impacts, iterations, residual,
                  run.guard_minimum, run.matrix, force, sliding,
                  np.max(np.abs(run.states[:, :problem.unknowns]), axis=0) if run.times.size > 2 else None)
@@ -329,7 +329,7 @@ def _segment_starts(problem: Problem, start, value: float, times: np.ndarray, tr
     if states.shape == (m, u):
         return states.copy()
     p, period = problem.build(value)
-    y, _, _, counters = driver.integrate(problem.system_id, p, _full(problem, states), times[0], times[-1],
+    y, _, _, counters = driver.integrate(problem.system_id, p, _full(problem, states, value), times[0], times[-1],
                                          times[:-1].copy(), problem.rtol, problem.atol, period / 32.0,
                                          driver.METHOD_DOP853, 50_000_000, 100_000, True)
     limits.check_run(counters, "run to the segments' starts")

@@ -69,6 +69,10 @@ class Problem:
         Tolerances of the variational runs, which give the monodromy matrix only (every
         residual comes from a plain run at ``rtol, atol``); None: ``rtol, atol``. The
         cam-follower's are ten times looser (:func:`system_problem`).
+    template_at : callable or None
+        ``template_at(value) -> ndarray (n,)``: the template at the scalar parameter
+        ``value``, for a model whose kept components depend on it (the cam's speed as a
+        state of two followers on a cam held at that speed); None: ``template``.
     """
 
     system_id: int
@@ -87,6 +91,14 @@ class Problem:
     key: str | None = None
     matrix_rtol: float | None = None
     matrix_atol: float | None = None
+    template_at: Callable[[float], np.ndarray] | None = field(default=None, compare=False)
+
+    def full_state(self, x, value: float) -> np.ndarray:
+        """The full state (n,) from the unknowns ``x`` at the scalar parameter ``value``:
+        the template there with its first ``unknowns`` components replaced."""
+        y = (self.template if self.template_at is None else self.template_at(float(value))).copy()
+        y[:self.unknowns] = np.asarray(x, dtype=float)
+        return y
 
     def matrix_tolerances(self) -> tuple[float, float]:
         """``(rtol, atol)`` of the variational runs."""

@@ -21,7 +21,7 @@ from camdyn.params.mechanism import MechanismSpec, read_mechanism
 from camdyn.params.system import System
 from camdyn.simulation.mechanisms import CamDrive
 
-__all__ = ["Mechanism", "load_mechanism", "simulate_mechanism", "mechanism_to_toml"]
+__all__ = ["Mechanism", "load_mechanism", "simulate_mechanism", "mechanism_to_toml", "mechanism_rig"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -137,6 +137,28 @@ def simulate_mechanism(mechanism: Mechanism, revolutions: float = 5.0, sample_ra
     return ds
 
 
+def mechanism_rig(mechanism: Mechanism):
+    """The mechanism as the rig its Python entry takes: a
+    :class:`~camdyn.simulation.flexible_pivot.FlexiblePivotRig` or a
+    :class:`~camdyn.simulation.two_followers.TwoFollowerRig` (its ``drive.initial_speed``,
+    if given, becomes the systems' ``motion.speed``); the driven cam is refused, having no
+    rig of fixed period (:func:`camdyn.continuation.mechanisms.mechanism_problem`)."""
+    spec = mechanism.spec
+    if spec.kind == "flexible-pivot":
+        from camdyn.simulation.flexible_pivot import FlexiblePivotRig
+        return FlexiblePivotRig(mechanism.system, spec.pivot_stiffness, mechanism.pivot_damping)
+    if spec.kind == "two-followers":
+        from camdyn.simulation.two_followers import TwoFollowerRig
+        system, second = mechanism.system, mechanism.second
+        if spec.initial_speed is not None:
+            motion = {"motion.speed": abs(spec.initial_speed) / (2.0 * math.pi),
+                      "motion.direction": 1 if spec.initial_speed >= 0.0 else -1}
+            system, second = system.with_values(**motion), second.with_values(**motion)
+        return TwoFollowerRig(system, second, spec.placement, mechanism.drive)
+    raise ParameterError("the driven cam has no fixed period: its speed is a state that settles where the drive and "
+                         "the load balance, so periodic orbits and continuation are not available for it")
+
+
 def _quoted(value: float, unit: str) -> str:
     return f'"{value!r} {unit}"'
 
@@ -157,7 +179,7 @@ def mechanism_to_toml(mechanism: Mechanism) -> str:
         fields = {"torque": "N*m", "stall_torque": "N*m", "free_speed": "rad/s", "proportional": "N*m*s/rad",
                   "integral": "N*m/rad", "target_speed": "rad/s"}
         used = {"constant": ("torque",), "motor": ("stall_torque", "free_speed"),
-                "controller": ("torque", "proportional", "integral", "target_speed")}[d.kind]
+                "controller": ("torque", "proportional", "integral", "target_speed"), "prescribed": ()}[d.kind]
         lines += [f"{name} = {_quoted(getattr(d, name), fields[name])}" for name in used]
         lines += [f"bearing_viscous = {_quoted(d.bearing_viscous, 'N*m*s/rad')}",
                   f"bearing_coulomb = {_quoted(d.bearing_coulomb, 'N*m')}",

@@ -22,7 +22,10 @@ Drive torques ``T_drive`` [N m] (``DRIVE_KIND``):
    magnet motor at constant voltage: Hughes and Drury, *Electric Motors and Drives*,
    5th ed., 2019, section 3.6);
 2. a PI speed controller with feed-forward, ``T0 + Kp (omega_ref - Theta_dot) + Ki z``,
-   ``z' = omega_ref - Theta_dot`` (Astrom and Murray, *Feedback Systems*, 2008, eq 10.6).
+   ``z' = omega_ref - Theta_dot`` (Astrom and Murray, *Feedback Systems*, 2008, eq 10.6);
+3. a prescribed speed: the drive holds ``Theta_dot`` at its starting value whatever the
+   load, ``Theta_ddot = 0`` and ``T_drive = T_bearing - T_contact`` (the limit
+   ``J -> infinity`` of (1)): the cam of the rocking follower, turning at constant speed.
 
 Bearing friction ``T_bearing = c_b Theta_dot + T_c tanh(Theta_dot / omega_b)`` [N m]:
 viscous plus a Coulomb torque smoothed over the speed ``omega_b`` (the tanh
@@ -51,7 +54,7 @@ from camdyn.model.dynamics import evaluate_cam
 from camdyn.model.geometry import contact_kinematics_trig, contact_rates_trig
 
 SHAFT_INERTIA = L.SIZE + 0     # J [kg m^2]
-DRIVE_KIND = L.SIZE + 1        # 0 constant torque, 1 DC motor line, 2 PI speed controller
+DRIVE_KIND = L.SIZE + 1        # 0 constant torque, 1 DC motor line, 2 PI speed controller, 3 prescribed
 DRIVE_TORQUE = L.SIZE + 2      # T0 [N m]: the constant torque, or the controller's feed-forward
 STALL_TORQUE = L.SIZE + 3      # T_stall [N m]
 FREE_SPEED = L.SIZE + 4        # omega_free [rad/s]
@@ -63,7 +66,9 @@ BEARING_COULOMB = L.SIZE + 9   # T_c [N m]
 BEARING_SPEED = L.SIZE + 10    # omega_b [rad/s]
 SIZE = L.SIZE + 11
 
-DRIVE_KINDS = {"constant": 0, "motor": 1, "controller": 2}
+DRIVE_KINDS = {"constant": 0, "motor": 1, "controller": 2, "prescribed": 3}
+#: The prescribed speed's drive kind (``Theta_ddot = 0``).
+PRESCRIBED = 3.0
 
 STATE_SIZE = 8
 CONTROLLED_SIZE = 5
@@ -76,13 +81,24 @@ __all__ = ["drive_torque", "bearing_torque", "contact_torque", "contact_torque_p
 @numba.njit(cache=True)
 def drive_torque(theta_dot, integral, p):
     """Drive torque ``T_drive`` [N m] at shaft speed ``theta_dot`` [rad/s] with the
-    controller's integral ``integral`` [rad] (module docstring, kinds 0-2)."""
+    controller's integral ``integral`` [rad] (module docstring, kinds 0-2; 0 for the
+    prescribed speed, kind 3, whose torque :func:`accelerations` solves from the load)."""
     kind = p[DRIVE_KIND]
+    if kind == PRESCRIBED:
+        return 0.0
     if kind == 0.0:
         return p[DRIVE_TORQUE]
     if kind == 1.0:
         return p[STALL_TORQUE] * (1.0 - theta_dot / p[FREE_SPEED])
     return p[DRIVE_TORQUE] + p[PROPORTIONAL] * (p[TARGET_SPEED] - theta_dot) + p[INTEGRAL] * integral
+
+
+@numba.njit(cache=True)
+def shaft_compliance(p):
+    """``1 / J`` [1/(kg m^2)], the factor of eq (1); 0 for a prescribed speed (kind 3)."""
+    if p[DRIVE_KIND] == PRESCRIBED:
+        return 0.0
+    return 1.0 / p[SHAFT_INERTIA]
 
 
 @numba.njit(cache=True)
@@ -135,7 +151,9 @@ def accelerations(y, mode, p):
         torque = contact_torque(y[0], y[2], fn, ff, p)
     drive = drive_torque(y[3], y[4], p)
     bearing = bearing_torque(y[3], p)
-    theta_ddot = (drive - bearing + torque) / p[SHAFT_INERTIA]     # eq (1)
+    if p[DRIVE_KIND] == PRESCRIBED:          # the torque that holds the speed: eq (1) with Theta_ddot = 0
+        drive = bearing - torque
+    theta_ddot = (drive - bearing + torque) * shaft_compliance(p)     # eq (1)
     return res[0], theta_ddot, drive, bearing, torque, res[10], fn, ff
 
 

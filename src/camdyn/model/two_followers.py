@@ -50,7 +50,7 @@ import numpy as np
 
 from camdyn.model import driven_cam
 from camdyn.model import layout as L
-from camdyn.model.driven_cam import bearing_torque, contact_torque_parts, drive_torque
+from camdyn.model.driven_cam import bearing_torque, contact_torque_parts, drive_torque, shaft_compliance
 from camdyn.model.dynamics import evaluate_cam, mode_expected_sign, mode_initial, mode_transition
 from camdyn.model.geometry import contact_kinematics_trig, contact_point_rate, contact_rates_trig
 
@@ -161,15 +161,15 @@ def accelerations(y, mode, p):
     t2 = follower_terms(1, y, mode, p)
     drive = drive_torque(y[5], y[6], p)
     bearing = bearing_torque(y[5], p)
-    inertia = p[driven_cam.SHAFT_INERTIA]
-    base = (drive - bearing + t1[4] + t2[4]) / inertia
+    compliance = shaft_compliance(p)          # 1 / J, or 0 at a prescribed speed
+    base = (drive - bearing + t1[4] + t2[4]) * compliance
     rows = np.zeros((2, 3))
     for i in range(FOLLOWERS):
         t = t1 if i == 0 else t2
         if mode[i * MODE_EACH + MODE_STICK] > 0.5:
             rows[i, i] = t[7] * t[1]
-            rows[i, 0] += t[8] * t1[5] / inertia
-            rows[i, 1] += t[8] * t2[5] / inertia
+            rows[i, 0] += t[8] * t1[5] * compliance
+            rows[i, 1] += t[8] * t2[5] * compliance
             rows[i, 2] = -(t[6] + t[7] * t[0] + t[8] * base)
         else:
             rows[i, i] = 1.0
@@ -177,9 +177,11 @@ def accelerations(y, mode, p):
     det = rows[0, 0] * rows[1, 1] - rows[0, 1] * rows[1, 0]
     force1 = (rows[0, 2] * rows[1, 1] - rows[0, 1] * rows[1, 2]) / det
     force2 = (rows[0, 0] * rows[1, 2] - rows[1, 0] * rows[0, 2]) / det
-    theta_ddot = base + (t1[5] * force1 + t2[5] * force2) / inertia                  # eq (1)
+    theta_ddot = base + (t1[5] * force1 + t2[5] * force2) * compliance               # eq (1)
     torque1 = t1[4] + t1[5] * force1
     torque2 = t2[4] + t2[5] * force2
+    if p[driven_cam.DRIVE_KIND] == driven_cam.PRESCRIBED:   # the torque that holds the speed (eq 1, Theta_ddot = 0)
+        drive = bearing - torque1 - torque2
     power1 = t1[9] - force1 * t1[5] * y[5]
     power2 = t2[9] - force2 * t2[5] * y[5]
     return (t1[0] + t1[1] * force1, t2[0] + t2[1] * force2, theta_ddot, drive, bearing, torque1, torque2,

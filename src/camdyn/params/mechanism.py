@@ -59,6 +59,7 @@ DRIVE_KINDS: dict[str, tuple[str, ...]] = {
     "constant": ("drive.torque",),
     "motor": ("drive.stall_torque", "drive.free_speed"),
     "controller": ("drive.torque", "drive.proportional", "drive.integral", "drive.target_speed"),
+    "prescribed": (),
 }
 #: The unit of an angular speed key: Hz and rpm are revolutions, rad/s radians (pint
 #: takes the radian as dimensionless, so these keys are read by :func:`angular_speed`).
@@ -86,8 +87,10 @@ SCHEMA: dict[str, Key] = {
                                          "this file); without it the [system] tables give the whole system"),
     "drive.shaft_inertia": Key("kg*m**2", REQUIRED, "inertia J of the cam and its shaft about the cam pivot",
                                "positive"),
-    "drive.kind": Key("str", "constant", "'constant' (a torque), 'motor' (a DC motor's torque-speed line) or "
-                                         "'controller' (a PI speed controller)"),
+    "drive.kind": Key("str", "constant", "'constant' (a torque), 'motor' (a DC motor's torque-speed line), "
+                                         "'controller' (a PI speed controller) or 'prescribed' (the cam held at "
+                                         "its starting speed whatever the load; the shaft inertia does not "
+                                         "enter)"),
     "drive.torque": Key("N*m", 0.0, "constant drive torque T0, or the controller's feed-forward"),
     "drive.stall_torque": Key("N*m", 0.0, "motor torque at rest T_stall"),
     "drive.free_speed": Key(ANGULAR_SPEED, REQUIRED, "motor's no-load speed omega_free"),

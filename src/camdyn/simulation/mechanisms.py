@@ -37,7 +37,9 @@ class CamDrive:
         ``"constant"``: the torque ``torque``; ``"motor"``: a DC motor's line
         ``stall_torque (1 - Theta_dot / free_speed)``; ``"controller"``: a PI speed
         controller, ``torque + proportional (target_speed - Theta_dot) + integral z``
-        with ``z' = target_speed - Theta_dot``.
+        with ``z' = target_speed - Theta_dot``; ``"prescribed"``: the shaft held at its
+        starting speed whatever the load (the limit of an infinite inertia; the drive's
+        torque is the one that holds it).
     torque : float
         Constant drive torque, or the controller's feed-forward [N m].
     stall_torque : float
