@@ -30,9 +30,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-from camdyn.continuation.branches import MIN_STEP, Branch, continue_orbits
+from camdyn.continuation.branches import Branch, continue_orbits
 from camdyn.continuation.orbits import Orbit, find_orbit
 from camdyn.continuation.problem import Problem, parameter_unit
+from camdyn.continuation.results import check_trace_settings
 from camdyn.errors import ParameterError
 from camdyn.model import contact
 from camdyn.model import layout as L
@@ -236,14 +237,7 @@ def trace_mechanism(rig, key: str, start: float, stop: float, periods: int = 1, 
     SimulationError
         If no orbit is found at ``start``.
     """
-    if not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
-        raise ParameterError(f"the range must be two different finite values, got {start} and {stop}")
-    if int(periods) != periods or periods < 1:
-        raise ParameterError(f"the period must be a positive integer number of cam periods, got {periods}")
-    if isinstance(segments, bool) or int(segments) != segments or segments < 1:
-        raise ParameterError(f"the number of shooting segments must be a positive integer, got {segments}")
-    if transient < 1 or max_points < 2 or not step >= MIN_STEP:
-        raise ParameterError(f"transient must be at least 1, max_points at least 2 and step at least {MIN_STEP:g}")
+    check_trace_settings(start, stop, periods, segments, transient, max_points, step, "cam periods")
     problem = mechanism_problem(rig, key, rtol=rtol, atol=rtol * 1e-2)
     problem.build(start)                                      # refuse an end value the mechanism cannot take
     problem.build(stop)

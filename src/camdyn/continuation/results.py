@@ -17,8 +17,24 @@ from camdyn.continuation.switching import switch_branch
 from camdyn.errors import CamdynError, ParameterError
 from camdyn.params.system import System
 
-__all__ = ["trace_branch", "switch_doublings", "orbit_record", "branch_records", "bifurcation_records",
-           "branches_dataset"]
+__all__ = ["check_trace_settings", "trace_branch", "switch_doublings", "orbit_record", "branch_records",
+           "bifurcation_records", "branches_dataset"]
+
+
+def check_trace_settings(start: float, stop: float, periods, segments, transient, max_points, step: float,
+                         period_name: str) -> None:
+    """Refuse, before any work, a branch's range ``start``-``stop`` [the parameter's unit]
+    that is not two different finite values, a period (in ``period_name``) or a number of
+    shooting segments that is not a positive integer, and a transient, point budget or
+    step out of range."""
+    if not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
+        raise ParameterError(f"the range must be two different finite values, got {start} and {stop}")
+    if int(periods) != periods or periods < 1:
+        raise ParameterError(f"the period must be a positive integer number of {period_name}, got {periods}")
+    if isinstance(segments, bool) or int(segments) != segments or segments < 1:
+        raise ParameterError(f"the number of shooting segments must be a positive integer, got {segments}")
+    if transient < 1 or max_points < 2 or not step >= MIN_STEP:
+        raise ParameterError(f"transient must be at least 1, max_points at least 2 and step at least {MIN_STEP:g}")
 
 
 def trace_branch(system: System, key: str, start: float, stop: float, periods: int = 1, step: float = 0.02,
@@ -37,14 +53,7 @@ def trace_branch(system: System, key: str, start: float, stop: float, periods: i
     SimulationError
         If no orbit is found at ``start``.
     """
-    if not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
-        raise ParameterError(f"the range must be two different finite values, got {start} and {stop}")
-    if int(periods) != periods or periods < 1:
-        raise ParameterError(f"the period must be a positive integer number of forcing periods, got {periods}")
-    if isinstance(segments, bool) or int(segments) != segments or segments < 1:
-        raise ParameterError(f"the number of shooting segments must be a positive integer, got {segments}")
-    if transient < 1 or max_points < 2 or not step >= MIN_STEP:
-        raise ParameterError(f"transient must be at least 1, max_points at least 2 and step at least {MIN_STEP:g}")
+    check_trace_settings(start, stop, periods, segments, transient, max_points, step, "forcing periods")
     problem = system_problem(system.with_values(**{key: start}), key, rtol=rtol, atol=rtol * 1e-2)
     problem.build(stop)                                       # refuse an end value the system cannot take
     orbit = find_orbit(problem, periods=int(periods), transient=transient, segments=int(segments))

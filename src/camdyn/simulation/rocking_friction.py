@@ -60,7 +60,7 @@ from camdyn.model import sliding_follower as model
 from camdyn.model import translating_follower as base
 from camdyn.simulation import limits
 from camdyn.simulation.rocking_roller import RockingFollower, rocking_table, spline_table
-from camdyn.simulation.sliding import FollowerFriction, event_kinds
+from camdyn.simulation.sliding import FollowerFriction, friction_dataset
 from camdyn.simulation.translating import TranslatingFollower, check_run_arguments, run_follower
 from camdyn.systems import registry as systems
 
@@ -274,21 +274,12 @@ def _dataset(follower, table, p, t, y, modes, events):
     """The run's Dataset in the arm's terms."""
     sigma = follower.geometry.lift_direction
     c = _samples(follower, table, p, t, y, modes)
-    kinds, velocities = event_kinds(p, events, modes.shape[0] > 0 and modes[0, 0] > 0.5)
-    shown = kinds != "joint"
-    events, kinds, velocities = events[shown], kinds[shown], velocities[shown]
-    rolling = (modes[:, 0] > 0.5) & (modes[:, model.SLIP] == 0.0)
     data = {name: (("time",), c[:, i], {"units": unit, "long_name": long}) for i, (name, unit, long)
             in enumerate(SERIES)}
     data.update({
         "psi": (("time",), table.rest_angle + sigma * c[:, 0], {"units": "rad", "long_name": "arm angle"}),
         "psi_dot": (("time",), sigma * c[:, 1], {"units": "rad/s", "long_name": "arm angular velocity"}),
-        "gap": (("time",), c[:, 0] - c[:, 2], {"units": "rad", "long_name": "angular gap to the cam"}),
-        "in_contact": (("time",), modes[:, 0].astype(np.int8), {"units": "1", "long_name": "contact mode"}),
-        "rolling": (("time",), rolling.astype(np.int8), {"units": "1", "long_name": "roller rolling (sticking)"}),
-        "event_time": (("event",), events[:, 0], {"units": "s", "long_name": "event time"}),
-        "event_kind": (("event",), kinds, {"long_name": "event kind"}),
-        "event_velocity": (("event",), velocities,
-                           {"units": "rad/s", "long_name": "relative angular velocity x_dot - s_dot before the event"}),
     })
-    return xr.Dataset(data, coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
+    return friction_dataset(p, t, modes, events, data, c[:, 0] - c[:, 2],
+                            {"units": "rad", "long_name": "angular gap to the cam"},
+                            {"units": "rad/s", "long_name": "relative angular velocity x_dot - s_dot before the event"})

@@ -230,12 +230,29 @@ def event_kinds(p, events, contact):
     return np.array(kinds, dtype=str), np.array(velocities, dtype=float)
 
 
-def _dataset(p, t, y, modes, events):
-    c = _samples(p, t, y, modes)
+def friction_dataset(p, t, modes, events, data: dict, gap, gap_attrs: dict, velocity_attrs: dict) -> xr.Dataset:
+    """The Dataset of a run with friction at the cam contact (system 10, translating or
+    rocking): the sampled variables ``data`` with the ``gap`` [m or rad], the contact mode,
+    the roller's rolling flag and the event log (the joints that changed nothing left
+    out), the events' relative velocity in ``velocity_attrs``'s unit."""
     kinds, velocities = event_kinds(p, events, modes.shape[0] > 0 and modes[0, 0] > 0.5)
     shown = kinds != "joint"   # the joints that changed nothing are left out
     events, kinds, velocities = events[shown], kinds[shown], velocities[shown]
     rolling = (modes[:, 0] > 0.5) & (modes[:, model.SLIP] == 0.0)
+    data = dict(data)
+    data.update({
+        "gap": (("time",), gap, gap_attrs),
+        "in_contact": (("time",), modes[:, 0].astype(np.int8), {"units": "1", "long_name": "contact mode"}),
+        "rolling": (("time",), rolling.astype(np.int8), {"units": "1", "long_name": "roller rolling (sticking)"}),
+        "event_time": (("event",), events[:, 0], {"units": "s", "long_name": "event time"}),
+        "event_kind": (("event",), kinds, {"long_name": "event kind"}),
+        "event_velocity": (("event",), velocities, velocity_attrs),
+    })
+    return xr.Dataset(data, coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
+
+
+def _dataset(p, t, y, modes, events):
+    c = _samples(p, t, y, modes)
     series = (("x", 0, "m", "follower position from the base circle"), ("x_dot", 1, "m/s", "follower velocity"),
               ("lift", 2, "m", "cam lift s"), ("contact_force", 3, "N", "normal force N of the cam on the follower"),
               ("line_force", 4, "N", "force of the cam along the follower's line"),
@@ -244,13 +261,5 @@ def _dataset(p, t, y, modes, events):
               ("roller_speed", 7, "rad/s", "roller spin omega_r"),
               ("friction_heat", 8, "J", "heat of friction since the start"))
     data = {name: (("time",), c[:, i], {"units": unit, "long_name": long}) for name, i, unit, long in series}
-    data.update({
-        "gap": (("time",), c[:, 0] - c[:, 2], {"units": "m", "long_name": "gap x - s"}),
-        "in_contact": (("time",), modes[:, 0].astype(np.int8), {"units": "1", "long_name": "contact mode"}),
-        "rolling": (("time",), rolling.astype(np.int8), {"units": "1", "long_name": "roller rolling (sticking)"}),
-        "event_time": (("event",), events[:, 0], {"units": "s", "long_name": "event time"}),
-        "event_kind": (("event",), kinds, {"long_name": "event kind"}),
-        "event_velocity": (("event",), velocities,
-                           {"units": "m/s", "long_name": "relative velocity x_dot - s_dot before the event"}),
-    })
-    return xr.Dataset(data, coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
+    return friction_dataset(p, t, modes, events, data, c[:, 0] - c[:, 2], {"units": "m", "long_name": "gap x - s"},
+                            {"units": "m/s", "long_name": "relative velocity x_dot - s_dot before the event"})

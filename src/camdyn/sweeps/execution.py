@@ -141,9 +141,8 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int = 1) -> dict:
     to stop through its abort flag and skips the points it has not begun.
     """
     if spec.mechanism:   # Python runs, one point after another: Ctrl-C stops between two
-        from camdyn.sweeps import mechanism_run
-        prepared = mechanism_run.prepare_chunk(spec, chunk)
-        return mechanism_run.finish(prepared, mechanism_run.run_chunk(*mechanism_run.run_args(spec, prepared)))
+        function, args, prepared, finish = _chunk_task(spec, chunk, threads)
+        return finish(prepared, function(*args))
     prepared = prepare_chunk(spec, chunk)
     abort = np.zeros(1, dtype=np.int64)
     result = {}
