@@ -77,6 +77,11 @@ JUMP_DISTANCE = 2.0
 #: smallest normal force) below this fraction of the margin's largest along the branch
 #: ends at that margin's zero [-].
 END_FRACTION = 1e-3
+#: A corrector that converges in this many iterations or fewer grows the next step by 1.5.
+FAST_CORRECTIONS = 4
+#: Most iterations of the corrector's fallback, Newton's method with the Jacobian renewed
+#: at every iterate (a variational run each).
+NEWTON_CORRECTIONS = 15
 
 __all__ = ["Bifurcation", "Branch", "continue_orbits", "continuation_scales", "KINDS"]
 
@@ -239,7 +244,8 @@ class _Continuation:
         """Chord iterations with ``jac``, or Newton's with a renewed Jacobian if None."""
         z = guess.copy()
         last = math.inf
-        for iteration in range(1, self.max_corrections + 1):
+        limit = self.max_corrections if jac is not None else min(self.max_corrections, NEWTON_CORRECTIONS)
+        for iteration in range(1, limit + 1):
             if jac is None:
                 _, fresh, _ = self.linearization(z)
                 residual = self.residual(z)
@@ -473,5 +479,6 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         value = new.orbit.parameter
         if last_step or not (lo - 1e-12 * scales[-1] <= value <= hi + 1e-12 * scales[-1]):
             return Branch(branch.orbits, branch.bifurcations, f"{problem.name} reached the end of its range")
-        ds = min(ds * 1.5, max_step) if new.iterations <= 4 else max(ds * 0.7, min_step) if new.iterations > 8 else ds
+        ds = (min(ds * 1.5, max_step) if new.iterations <= FAST_CORRECTIONS
+              else max(ds * 0.7, min_step) if new.iterations > 8 else ds)
     return Branch(branch.orbits, branch.bifurcations, f"{max_points} points computed")
