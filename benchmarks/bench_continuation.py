@@ -137,12 +137,13 @@ def _window(system, speed: float, periods: int, down: float, up: float, step: fl
 #: 20.0 Hz (period 2), 20.7 Hz (period 4), 29.0 Hz (period 3 and its period-6 branch),
 #: then the narrowest: period 3 at 8.9 Hz, 5 at 9.0 Hz, 2 at 19.1 Hz, 8 at 19.3 Hz, 2 at
 #: 19.4 Hz, 4 at 19.6 Hz and 6 at 19.7 Hz.
-WINDOWS = [(7.28, 1, 7.25, 7.32, {"step": 0.002, "max_step": 0.01, "levels": 1}),
-           (9.2, 2, 9.0, 9.45, {"step": 0.02, "max_step": 0.1, "levels": 1}),
-           (9.55, 3, 9.45, 9.7, {"step": 0.02, "max_step": 0.1}),
-           (20.0, 2, 19.7, 20.5, {"step": 0.02, "max_step": 0.1, "levels": 1}),
-           (20.7, 4, 20.4, 20.9, {"step": 0.02, "max_step": 0.1}),
-           (29.0, 3, 28.8, 29.3, {"step": 0.02, "max_step": 0.1, "levels": 1}),
+WIDE = {"step": 0.02, "max_step": 0.1, "max_points": 200}
+WINDOWS = [(7.28, 1, 7.25, 7.32, {"step": 0.002, "max_step": 0.01, "max_points": 200, "levels": 1}),
+           (9.2, 2, 9.0, 9.45, {**WIDE, "levels": 1}),
+           (9.55, 3, 9.45, 9.7, WIDE),
+           (20.0, 2, 19.7, 20.5, {**WIDE, "levels": 1}),
+           (20.7, 4, 20.4, 20.9, WIDE),
+           (29.0, 3, 28.8, 29.3, {**WIDE, "levels": 1}),
            (8.9, 3, 8.8, 8.92, {}), (9.0, 5, 8.9, 9.1, {}), (19.1, 2, 19.0, 19.2, {}), (19.3, 8, 19.2, 19.302, {}),
            (19.4, 2, 19.3, 19.5, {}), (19.6, 4, 19.5, 19.7, {}), (19.7, 6, 19.6, 19.8, {})]
 

@@ -76,11 +76,13 @@ JUMP_TOLERANCE = 0.1
 JUMP_DISTANCE = 2.0
 #: A corrector that converges in this many iterations or fewer grows the next step by 1.5.
 FAST_CORRECTIONS = 4
-#: A new point within this fraction of the last step from the point before the last ends
-#: the branch: the tangent's orientation has flipped and the continuation steps to and
-#: fro over its own points (on the chapter 3 rig the period-4 branch from 20.7 Hz
-#: alternated between 20.41412 and 20.41513 Hz for 200 points near the branch point where
-#: it meets the period-2 orbit) [-].
+#: Two new points in a row, each within this fraction of the last step from the point
+#: before the last, end the branch: the tangent's orientation flips at every point and
+#: the continuation steps to and fro over its own points (on the chapter 3 rig the
+#: period-4 branch from 20.7 Hz alternated between 20.41412 and 20.41513 Hz for 200
+#: points near the branch point where it meets the period-2 orbit). One step back alone
+#: does not end it: the period-2 branch from 9.2 Hz takes one next to its grazing near
+#: 9.013 Hz and goes on until its step falls below the minimum [-].
 RETRACE = 0.1
 #: Most iterations of the corrector's fallback, Newton's method with the Jacobian renewed
 #: at every iterate (a variational run each).
@@ -155,6 +157,7 @@ class _Continuation:
         self.segments = segments
         self.u = problem.unknowns * segments
         self.orientation = 0.0      # sign of det([J; t]) along the branch, set at its first point
+        self.retraced = 0           # consecutive points that stepped back onto the point before the last
 
     def unscale(self, z: np.ndarray) -> tuple[np.ndarray, float]:
         u = z * self.scales
@@ -361,8 +364,10 @@ def _ended(job: _Continuation, new: _Point, last: _Point, before: np.ndarray | N
     (:data:`RETRACE`), or a period-``2k`` branch meets its period-``k`` orbit
     (:func:`_half_distance`, appended to ``halves``)."""
     where = f"{job.problem.name} = {new.orbit.parameter:.9g}"
-    if before is not None and np.linalg.norm(new.z - before) < RETRACE * np.linalg.norm(last.z - before):
-        return f"the continuation turned back onto its own points at {where}"
+    back = before is not None and np.linalg.norm(new.z - before) < RETRACE * np.linalg.norm(last.z - before)
+    job.retraced = job.retraced + 1 if back else 0
+    if job.retraced >= 2:
+        return f"the continuation stepped to and fro over its own points at {where}"
     if halves is not None:
         halves.append(_half_distance(job, new.orbit))
         if halves[-1] < END_FRACTION * max(halves):
