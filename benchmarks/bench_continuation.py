@@ -112,18 +112,20 @@ def _segment(system, first: float, last: float, periods: int = 1, levels: int = 
 
 
 def _window(system, speed: float, periods: int, down: float, up: float, step: float = 5e-4, max_step: float = 2e-3,
-            max_points: int = 60, levels: int = 0) -> dict:
-    """A narrow window's period-``periods`` branch: the orbit at ``speed`` [Hz] from a
+            max_points: int = 60, levels: int = 0, downwards: dict | None = None) -> dict:
+    """A window's period-``periods`` branch: the orbit at ``speed`` [Hz] from a
     400-revolution plain run from rest (the brute-force diagram's state), continued down
-    to ``down`` and up to ``up`` [Hz] in short steps (scaled units), with its doublings
-    switched onto down to ``levels``; points, ends, bifurcations and CPU time [s]."""
+    to ``down`` and up to ``up`` [Hz] (by default in short steps, scaled units; the
+    settings ``downwards`` replace them downwards), with its doublings switched onto down
+    to ``levels``; points, ends, bifurcations and CPU time [s]."""
     from camdyn.continuation.orbits import transient_state
     from camdyn.continuation.results import switch_doublings
     t, c = time.perf_counter(), time.process_time()
     problem = system_problem(system.with_values(**{"motion.speed": speed}), "motion.speed")
     orbit = find_orbit(problem, start=transient_state(problem, 400), periods=periods)
-    branches = [continue_orbits(problem, orbit, stop, step=step, max_step=max_step, max_points=max_points)
-                for stop in (down, up)]
+    upwards = {"step": step, "max_step": max_step, "max_points": max_points}
+    branches = [continue_orbits(problem, orbit, down, **{**upwards, **(downwards or {})}),
+                continue_orbits(problem, orbit, up, **upwards)]
     branches += switch_doublings(problem, branches[1], up, levels=levels, step=step, max_points=max_points)
     return {"speed_hz": speed, "periods": periods, "wall_s": time.perf_counter() - t, "cpu_s": time.process_time() - c,
             "branches": [{"points": len(b.orbits), "periods": b.orbits[-1].periods,
@@ -140,12 +142,14 @@ def _window(system, speed: float, periods: int, down: float, up: float, step: fl
 WIDE = {"step": 0.02, "max_step": 0.1, "max_points": 200}
 WINDOWS = [(7.28, 1, 7.25, 7.32, {"step": 0.002, "max_step": 0.01, "max_points": 200, "levels": 1}),
            (9.2, 2, 9.0, 9.45, {**WIDE, "levels": 1}),
-           (9.55, 3, 9.45, 9.7, WIDE),
+           (9.55, 3, 9.45, 9.7, {**WIDE, "max_points": 100}),
            (20.0, 2, 19.7, 20.5, {**WIDE, "levels": 1}),
            (20.7, 4, 20.4, 20.9, WIDE),
            (29.0, 3, 28.8, 29.3, {**WIDE, "levels": 1}),
-           (8.9, 3, 8.8, 8.92, {}), (9.0, 5, 8.9, 9.1, {}), (19.1, 2, 19.0, 19.2, {}), (19.3, 8, 19.2, 19.302, {}),
-           (19.4, 2, 19.3, 19.5, {}), (19.6, 4, 19.5, 19.7, {}), (19.7, 6, 19.6, 19.8, {})]
+           (8.9, 3, 8.8, 8.92, {"downwards": {"step": 0.02, "max_step": 0.1, "max_points": 12}}),
+           (9.0, 5, 8.9, 9.1, {}),
+           (19.1, 2, 19.0, 19.2, {}), (19.3, 8, 19.2, 19.302, {}), (19.4, 2, 19.3, 19.5, {}),
+           (19.6, 4, 19.5, 19.7, {"max_step": 0.005}), (19.7, 6, 19.6, 19.8, {})]
 
 
 def chapter3(skip_sweep: bool) -> dict:
