@@ -13,9 +13,10 @@ runs in the test, not from the continuation."""
 import numpy as np
 
 # forcing periods of the plain runs that decide a speed's motion: the slowest-decaying
-# stable orbit at the bracketing speeds below has |mu| = 0.985 per 8 revolutions
-# (19.3007 Hz, measured), 0.985^(1500/8) = 6e-2 of the start's distance, and the
-# comparison is at 1e-6 rad; runs that did not settle are reported as no period
+# stable orbit at the bracketing speeds below has |mu| = 0.946 per 8 revolutions
+# (19.3007 Hz, measured), 0.946^(1500/8) = 3e-5 of the start's distance (5e-3 rad/s
+# there: 1.5e-7), below the comparison's 1e-6 rad; runs that did not settle are reported
+# as no period
 TRANSIENT = 1500
 KEEP = 48
 
@@ -67,7 +68,7 @@ def test_period_three_window_near_9_hz_from_its_grazing_to_its_doubling():
     up to a period doubling at 8.91397 Hz (period 3 at 8.912 Hz, period 6 at 8.9145 Hz).
     The branch reaches the grazing and does not cross it: its corrector lands back on the
     5-impact side, and the points step to and fro within 1.4e-5 Hz of it (measured: no
-    grazing reported in 100 points; reported at 8.814993 Hz after some 200 more)."""
+    grazing reported in 100 points; within 300, at 8.814993 Hz)."""
     from camdyn.continuation.results import _sections
     problem, start, orbit, (down, up) = _window(8.9, 3, 8.7, 8.92, max_points=15, step=0.02, max_step=0.1)
     assert orbit.periods == 3 and orbit.impacts_per_period == 5 and orbit.stable
