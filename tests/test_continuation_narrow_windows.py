@@ -1,5 +1,6 @@
 """Continuation in the narrowest periodic windows of the chapter 3 impact rig (e/rc = 0.2)
-against plain runs, and the contact branch's end at its loss of contact.
+against plain runs, the ends of the period-4 branch near 20.4 Hz, and the contact
+branch's end at its loss of contact.
 
 Each window's orbit is Newton-solved from the state of a plain run from rest after its
 transient (as the brute-force diagram's runs are), at a speed where the diagram shows it:
@@ -128,3 +129,33 @@ def test_contact_branch_from_5_hz_reports_its_loss_of_contact():
 
     assert events(losses[0]) == 0
     assert events(losses[0] + 5e-5) > 0
+
+
+def test_period_four_branch_from_20_7_hz_ends_near_the_period_two_doubling():
+    """The period-4 branch from 20.7 Hz (3 impacts per 4 revolutions) grazes at 20.57672 Hz
+    (plain runs from its orbit at 20.5773 Hz: period 4 at 20.5768 Hz, period 16 at 20.5766),
+    then, unstable with 4 impacts, doubles at 20.43622 Hz and comes near the period-2
+    orbit's doubling at 20.41352 Hz, where it stepped to and fro between 20.41412 and
+    20.41513 Hz for 200 points before the continuation ended such branches (measured); the
+    period-8 branch switched at 20.43622 Hz fell back onto the period-4 orbit and crept
+    along it. Both end now, with the same bifurcations located, within a few hundred
+    points."""
+    import camdyn
+    from camdyn.continuation.orbits import shoot
+    from camdyn.continuation.results import switch_doublings, trace_branch
+    problem, branch = trace_branch(camdyn.load_system("sundar2014-impact"), "motion.speed", 20.7, 20.4, periods=4,
+                                   transient=100, step=0.02, max_points=500)
+    doubled = switch_doublings(problem, branch, 20.4, levels=1, max_points=500)
+    assert "to and fro" in branch.stopped and len(branch.orbits) < 200, (branch.stopped, len(branch.orbits))
+    assert 20.4135 < min(o.parameter for o in branch.orbits) < 20.4152
+    grazings, doublings = _located(branch, "grazing"), _located(branch, "period-doubling")
+    assert len(grazings) == 1 and 20.5766 < grazings[0] < 20.5768, branch.bifurcations
+    assert len(doublings) == 1 and 20.4135 < doublings[0] < grazings[0], branch.bifurcations
+    near = min(branch.orbits, key=lambda o: abs(o.parameter - 20.5773))
+    assert near.stable and near.impacts_per_period == 3
+    assert _settled(problem, near.state, 20.5768)[0] == 4
+    assert _settled(problem, near.state, 20.5766)[0] == 16
+    # the switched branch's last orbit repeats after 4 revolutions: it is the period-4 orbit
+    assert len(doubled) == 1 and len(doubled[0].orbits) < 20, [len(b.orbits) for b in doubled]
+    last = doubled[0].orbits[-1]
+    assert last.periods == 8 and np.max(np.abs(shoot(problem, last.state, last.parameter, 4) - last.state)) < 1e-6
