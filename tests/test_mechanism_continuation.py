@@ -236,3 +236,38 @@ def test_the_cli_continues_two_followers(tmp_path):
     first = doc["branches"][0][0]
     assert len(first["state"]) == 4 and len(first["multipliers"]) == 4 and first["stable"]
     assert out.stat().st_size > 0
+
+
+def test_newton_from_past_the_doubling_gives_up_at_once(tmp_path, monkeypatch):
+    """The flexible pivot at 16 Hz, past its period doubling (15.896 Hz): 50 cam periods
+    of transient end on the period-2 attractor, and Newton's method for the period-1
+    orbit from there wanders: its third iterate put the follower 4.7 mm into the cam,
+    whose variational run took 1.1 million steps for a sixteenth of a period (the command
+    ran for hours). Newton's method stops where a variational run needs 20 times the
+    first one's steps: the command fails in one line (measured 10 s), and a shorter
+    transient, still near the unstable period-1 orbit, finds it."""
+    monkeypatch.chdir(tmp_path)
+    status, out, err = run(["continue", EXAMPLES / "flexible_pivot.toml", "--from", "16Hz", "--to", "15.7Hz",
+                            "--json"])
+    lines = err.strip().splitlines()
+    assert status == 1 and out == "" and len(lines) == 1, (out, err)
+    assert lines[0].startswith("error: no period-1 orbit found") and "left the start's neighbourhood" in lines[0]
+
+
+def test_the_cli_shows_its_progress_and_announces_a_long_run(tmp_path, monkeypatch):
+    """On a terminal the continuation shows what it does (the parameter's value, the
+    orbits found, the time) and, where the point budget at the first orbit's cost
+    exceeds the limit (set to 0 s here), says how long it may take."""
+    from rich.console import Console
+
+    from camdyn.cli import continuation as command
+
+    screen = io.StringIO()
+    monkeypatch.setattr(command, "err_console", Console(file=screen, force_terminal=True, width=160))
+    monkeypatch.setattr(command, "LONG_RUN", 0.0)
+    status, text, err = run(["continue", EXAMPLES / "two_followers_prescribed.toml", "--from", "11.55Hz", "--to",
+                             "11.6Hz", "--max-points", "3", "--step", "0.002", "--transient", "5"])
+    assert status == 0, err
+    shown = screen.getvalue()
+    assert "motion.speed = 11.5" in shown and "3 orbits" in shown, shown
+    assert "note: the first orbit took" in shown and "--max-points" in shown, shown
