@@ -255,6 +255,9 @@ def test_a_stick_slip_cycle_keeps_the_switch_model_laws():
     # contacts stick, the controller's integral winds the torque up until they break
     # loose. While a contact sticks its sliding velocity stays zero and its friction
     # inside mu_s Fn; while it slides (in contact) its friction is mu_k Fn exactly.
+    # Follower 1 sticks 3 times and slips twice, follower 2 sticks and slips twice, both
+    # breaking loose at 71 ms (with follower 2's contact damping 5 % below follower 1's,
+    # before both took the single follower's, the contacts alternated some 18 times).
     rig = drum_brake()
     drive = CamDrive(shaft_inertia=2e-4, kind="controller", proportional=0.01, integral=0.5, target_speed=2.0)
     ds = simulate_two_followers(rig.system, drive, second=rig.second, placement=rig.placement, duration=0.1,
@@ -262,7 +265,7 @@ def test_a_stick_slip_cycle_keeps_the_switch_model_laws():
     kinds = ds.transition_kind.values
     for k in (1, 2):
         mine = kinds[ds.transition_follower.values == k]
-        assert (mine == "stick").sum() >= 3 and (mine == "slip").sum() >= 3
+        assert (mine == "stick").sum() >= 2 and (mine == "slip").sum() >= 2
         f = ds.sel(follower=k)
         stuck = f.sticking.values == 1
         sliding = ~stuck & (f.in_contact.values == 1)
