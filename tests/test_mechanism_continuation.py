@@ -254,7 +254,7 @@ def test_the_cli_continues_two_followers(tmp_path):
 
 
 def test_newton_from_past_the_doubling_gives_up_at_once(tmp_path, monkeypatch):
-    """The flexible pivot at 16 Hz, past its period doubling (15.896 Hz): 50 cam periods
+    """The flexible pivot at 16 Hz, past its period doubling (15.895 Hz): 50 cam periods
     of transient end on the period-2 attractor, and Newton's method for the period-1
     orbit from there wanders: its third iterate put the follower 4.7 mm into the cam,
     whose variational run took 1.1 million steps for a sixteenth of a period (the command
