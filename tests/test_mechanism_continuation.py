@@ -258,7 +258,7 @@ def test_newton_from_past_the_doubling_gives_up_at_once(tmp_path, monkeypatch):
     of transient end on the period-2 attractor, and Newton's method for the period-1
     orbit from there wanders: its third iterate put the follower 4.7 mm into the cam,
     whose variational run took 1.1 million steps for a sixteenth of a period (the command
-    ran for hours). Newton's method stops where a variational run needs 20 times the
+    ran for more than 12 minutes). Newton's method stops where a variational run needs 20 times the
     first one's steps: the command fails in one line (measured 10 s), and a shorter
     transient, still near the unstable period-1 orbit, finds it."""
     monkeypatch.chdir(tmp_path)
