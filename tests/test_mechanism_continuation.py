@@ -18,7 +18,7 @@ import pytest
 from camdyn.cli.app import main
 from camdyn.continuation.branches import continue_orbits
 from camdyn.continuation.mechanisms import mechanism_problem
-from camdyn.continuation.orbits import find_orbit
+from camdyn.continuation.orbits import find_orbit, flow
 from camdyn.continuation.problem import system_problem
 from camdyn.errors import ParameterError
 from camdyn.integrator import driver
@@ -127,9 +127,11 @@ def test_each_of_two_identical_followers_rides_the_single_followers_orbit(pair_o
     """On a cam held at its speed the followers do not feel each other: follower 1's
     orbit is the single follower's (``system_problem``), follower 2's the same orbit half
     a period later (it sits opposite, the cam turned by pi in its frame), both to 1e-6;
-    the monodromy matrix has no coupling block. (Follower 2's viscous contact damping
-    coefficient, set at its own starting cam angle, is 5 % below follower 1's: it moves
-    the multipliers, not the orbit in sustained contact beyond 1e-10.)"""
+    the monodromy matrix has no coupling block, and follower 2's block has follower 1's
+    multipliers (its own at phase 0 is follower 1's at phase T/2, which has the same
+    eigenvalues) to 1e-5 (measured 1e-7, 2.2788e-5 in modulus; when follower 2's viscous
+    contact damping was set at its own starting cam angle, 5 % below follower 1's, its
+    pair was 3.8e-5)."""
     system = prescribed_pair().system
     single = system_problem(system)
     period = single.build(single.value)[1]
@@ -138,6 +140,9 @@ def test_each_of_two_identical_followers_rides_the_single_followers_orbit(pair_o
     assert np.max(np.abs(pair_orbit.state[:2] - first.state)) < 1e-6
     assert np.max(np.abs(pair_orbit.state[2:] - second.state)) < 1e-6
     assert np.all(pair_orbit.monodromy[:2, 2:] == 0.0) and np.all(pair_orbit.monodromy[2:, :2] == 0.0)
+    ones, twos = (np.sort_complex(np.linalg.eigvals(block)) for block in (pair_orbit.monodromy[:2, :2],
+                                                                            pair_orbit.monodromy[2:, 2:]))
+    assert np.max(np.abs(twos - ones)) < 1e-5 * np.max(np.abs(ones))
 
 
 def test_the_multipliers_are_those_of_a_difference_monodromy(pair_problem, pair_orbit):
@@ -156,19 +161,29 @@ def test_the_impacting_pivots_multipliers_are_those_of_a_difference_monodromy():
     a period-1 orbit with one impact per revolution, unstable past a period doubling
     (leading multiplier about -1.15, the rigid pivot's -0.99). Its two leading
     multipliers against the eigenvalues of a difference monodromy (plain runs at
-    ``rtol = 1e-12``, steps 1e-7 rad, 1e-6 rad/s, 1e-10 m, 1e-7 m/s), to 1e-3 of their
-    modulus: measured 4e-4, of which 3e-4 remain with the variational runs at
-    ``rtol = 1e-10`` (not traced yet; the model's Jacobian by central differences, whose
-    step in ``u``, ``v`` is 1e-7 m, is suspected); and a plain run of 4 periods returns
-    to the orbit."""
+    ``rtol = 1e-12``, steps 1e-6 rad, 1e-5 rad/s, 1e-9 m, 1e-6 m/s; -1.148071 and
+    -0.266403, within 4e-6 of those at ten times smaller steps or ``rtol = 1e-13``):
+
+    - from a variational run at ``rtol = 1e-9``, to 3e-5 of their modulus (measured
+      1.0e-5 and 8e-6; the run at ``1e-10`` gives 1.5e-5 and 1.2e-5). With the flexible
+      pivot's former Jacobian by plain central differences of the right-hand side, these
+      runs converged to 2.4e-4 away (-1.147799 at ``1e-10``);
+    - the orbit's own, from the run at the problem's matrix tolerance (``1e-7``), to 1e-3:
+      at that tolerance they move by a few 1e-4 from run to run (measured 4.9e-4).
+
+    And a plain run of 4 periods returns to the orbit."""
     problem = mechanism_problem(chapter3_flexible_pivot())
     orbit = find_orbit(problem, transient=20)
     assert orbit.impacts_per_period == 1 and not orbit.stable
-    matrix = difference_monodromy(problem, orbit, 1e-7 * np.array([1.0, 10.0, 1e-3, 1.0, 1e-3, 1.0]))
+    matrix = difference_monodromy(problem, orbit, 1e-6 * np.array([1.0, 10.0, 1e-3, 1.0, 1e-3, 1.0]))
     expected = np.linalg.eigvals(matrix)
-    expected = expected[np.argsort(-np.abs(expected))]
+    expected = expected[np.argsort(-np.abs(expected))][:2]
     assert expected[0].real < -1.0
-    assert np.max(np.abs(orbit.multipliers[:2] - expected[:2]) / np.abs(expected[:2])) < 1e-3
+    tight = flow(dataclasses.replace(problem, matrix_rtol=1e-9, matrix_atol=1e-11), orbit.state, orbit.parameter)
+    found = np.linalg.eigvals(tight.matrix)
+    found = found[np.argsort(-np.abs(found))][:2]
+    assert np.max(np.abs(found - expected) / np.abs(expected)) < 3e-5
+    assert np.max(np.abs(orbit.multipliers[:2] - expected) / np.abs(expected)) < 1e-3
     end = plain_end(problem, orbit.state, orbit.parameter, periods=4)
     assert np.max(np.abs(end - orbit.state) / (1.0 + np.abs(orbit.state))) < 1e-9
 
@@ -236,3 +251,38 @@ def test_the_cli_continues_two_followers(tmp_path):
     first = doc["branches"][0][0]
     assert len(first["state"]) == 4 and len(first["multipliers"]) == 4 and first["stable"]
     assert out.stat().st_size > 0
+
+
+def test_newton_from_past_the_doubling_gives_up_at_once(tmp_path, monkeypatch):
+    """The flexible pivot at 16 Hz, past its period doubling (15.895 Hz): 50 cam periods
+    of transient end on the period-2 attractor, and Newton's method for the period-1
+    orbit from there wanders: its third iterate put the follower 4.7 mm into the cam,
+    whose variational run took 1.1 million steps for a sixteenth of a period (the command
+    ran for more than 12 minutes). Newton's method stops where a variational run needs 20 times the
+    first one's steps: the command fails in one line (measured 10 s), and a shorter
+    transient, still near the unstable period-1 orbit, finds it."""
+    monkeypatch.chdir(tmp_path)
+    status, out, err = run(["continue", EXAMPLES / "flexible_pivot.toml", "--from", "16Hz", "--to", "15.7Hz",
+                            "--json"])
+    lines = err.strip().splitlines()
+    assert status == 1 and out == "" and len(lines) == 1, (out, err)
+    assert lines[0].startswith("error: no period-1 orbit found") and "left the start's neighbourhood" in lines[0]
+
+
+def test_the_cli_shows_its_progress_and_announces_a_long_run(tmp_path, monkeypatch):
+    """On a terminal the continuation shows what it does (the parameter's value, the
+    orbits found, the time) and, where the point budget at the first orbit's cost
+    exceeds the limit (set to 0 s here), says how long it may take."""
+    from rich.console import Console
+
+    from camdyn.cli import continuation as command
+
+    screen = io.StringIO()
+    monkeypatch.setattr(command, "err_console", Console(file=screen, force_terminal=True, width=160))
+    monkeypatch.setattr(command, "LONG_RUN", 0.0)
+    status, text, err = run(["continue", EXAMPLES / "two_followers_prescribed.toml", "--from", "11.55Hz", "--to",
+                             "11.6Hz", "--max-points", "3", "--step", "0.002", "--transient", "5"])
+    assert status == 0, err
+    shown = screen.getvalue()
+    assert "motion.speed = 11.5" in shown and "3 orbits" in shown, shown
+    assert "note: the first orbit took" in shown and "--max-points" in shown, shown

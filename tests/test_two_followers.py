@@ -9,6 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from camdyn.errors import ParameterError
+from camdyn.integrator import driver
 from camdyn.model import driven_cam
 from camdyn.model import layout as L
 from camdyn.model import two_followers as pair
@@ -254,6 +255,9 @@ def test_a_stick_slip_cycle_keeps_the_switch_model_laws():
     # contacts stick, the controller's integral winds the torque up until they break
     # loose. While a contact sticks its sliding velocity stays zero and its friction
     # inside mu_s Fn; while it slides (in contact) its friction is mu_k Fn exactly.
+    # Follower 1 sticks 3 times and slips twice, follower 2 sticks and slips twice, both
+    # breaking loose at 71 ms (with follower 2's contact damping 5 % below follower 1's,
+    # before both took the single follower's, the contacts alternated some 18 times).
     rig = drum_brake()
     drive = CamDrive(shaft_inertia=2e-4, kind="controller", proportional=0.01, integral=0.5, target_speed=2.0)
     ds = simulate_two_followers(rig.system, drive, second=rig.second, placement=rig.placement, duration=0.1,
@@ -261,7 +265,7 @@ def test_a_stick_slip_cycle_keeps_the_switch_model_laws():
     kinds = ds.transition_kind.values
     for k in (1, 2):
         mine = kinds[ds.transition_follower.values == k]
-        assert (mine == "stick").sum() >= 3 and (mine == "slip").sum() >= 3
+        assert (mine == "stick").sum() >= 2 and (mine == "slip").sum() >= 2
         f = ds.sel(follower=k)
         stuck = f.sticking.values == 1
         sliding = ~stuck & (f.in_contact.values == 1)
@@ -417,3 +421,54 @@ def test_a_stuck_pair_breaks_loose_when_an_independent_solution_leaves_the_cone(
     assert (ds.sticking.values[0] == 1).all() and ds.transition_kind.values[0] == "slip"
     assert ds.transition_follower.values[0] == which + 1
     assert ds.transition_time.values[0] == pytest.approx(t_break, abs=1e-9), ds.transition_time.values[0] - t_break
+
+
+def test_two_followers_of_one_system_get_the_single_followers_contact_damping():
+    """Each follower's viscous contact damping coefficient (the drum brake's law, set by a
+    damping ratio at a static equilibrium) is the single follower's, from its system's
+    equilibrium at that system's own starting cam angle: the drum brake's two identical
+    followers get one coefficient, although follower 2 starts half a turn round, where
+    its equilibrium there would give another (64.29 against the single follower's 67.54
+    N s/m)."""
+    rig = drum_brake()
+    p, _ = pack_two_followers(rig.system, rig.second, rig.placement, rig.drive)
+    single = prepare(rig.system).viscous_c
+    assert single > 0.0
+    assert p[L.VISCOUS_C] == single and p[pair.SECOND + L.VISCOUS_C] == single
+    placed = prepare(rig.second.with_values(**{"motion.initial_angle": prepare(rig.system).theta0 - rig.placement}))
+    assert abs(placed.viscous_c - single) > 0.01 * single      # the placed start would not do
+    # a follower 2 of another system gets that system's own coefficient
+    other = rig.second.with_values(**{"spring.stiffness": 0.8 * rig.second.spring.stiffness})
+    p, _ = pack_two_followers(rig.system, other, rig.placement, rig.drive)
+    assert p[pair.SECOND + L.VISCOUS_C] == prepare(other).viscous_c != single
+
+
+def test_follower_two_on_a_held_cam_moves_as_the_single_follower_placed_where_it_sits():
+    """The drum brake on a cam held at its speed (``kind = "prescribed"``): follower 2,
+    released from its static equilibrium half a turn round, rings on its contact and
+    settles. The single follower of the cam-follower model (:func:`camdyn.simulate`'s
+    model), its cam started half a turn round and its contact damping its own, released
+    from the same angle, moves the same to 1e-9 of the range of its angle and speed
+    (measured 6e-12 and 4e-10). With follower 2's coefficient from its equilibrium
+    there, 5 % lower, they differ by 1.4e-3 and 8.6e-2 of those ranges."""
+    rig = drum_brake()
+    drive = CamDrive(2e-4, kind="prescribed")
+    p_pair, y_pair = pack_two_followers(rig.system, rig.second, rig.placement, drive)
+    revolutions = 0.25
+    period = rig.system.motion.period
+    times = np.linspace(0.0, revolutions * period, 401)
+    both, _, _, counters = driver.integrate(registry.TWO_FOLLOWERS, p_pair, y_pair, 0.0, times[-1], times, 1e-12,
+                                            1e-14, period / 64.0, driver.METHOD_DOP853, 10_000_000, 100_000)
+    assert counters[driver.COUNT_STATUS] == 0
+    shifted = rig.system.with_values(**{"motion.initial_angle": y_pair[4] - rig.placement})
+    p_one = prepare(shifted).p
+    p_one[L.VISCOUS_C] = prepare(rig.system).viscous_c        # the single follower's own coefficient
+    one, _, _, counters = driver.integrate(registry.CAM_FOLLOWER, p_one, np.array([y_pair[2], 0.0, 0.0]), 0.0,
+                                           times[-1], times, 1e-12, 1e-14, period / 64.0, driver.METHOD_DOP853,
+                                           10_000_000, 100_000)
+    assert counters[driver.COUNT_STATUS] == 0
+    for column, slot in ((0, 2), (1, 3)):
+        expected = one[:, column]
+        scale = np.ptp(expected)
+        assert scale > 0.0
+        np.testing.assert_allclose(both[:, slot], expected, rtol=0, atol=1e-9 * scale)

@@ -85,9 +85,14 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         raise ParameterError("--doublings must be at least 0, --brute-force 0 or at least 2")
     if brute_force and plot is None:
         raise ParameterError("--brute-force draws the diagram under the branches of --plot: give --plot")
-    problem, branch = _trace(system, parameter, first, last, period, step, max_points, transient, quiet or json_,
-                             segments, mechanism)
-    branches = [branch, *switch_doublings(problem, branch, last, doublings, step, max_points)]
+    bar = _Bar(quiet or (json_ and not err_console.is_terminal), parameter, unit, first, last,
+               max_points * (1 + doublings))
+    with bar:
+        problem, branch = _trace(system, parameter, first, last, period, step, max_points, transient, bar,
+                                 segments, mechanism)
+        bar.phase(f"the period-{2 * period} branches" if doublings else "")
+        branches = [branch, *switch_doublings(problem, branch, last, doublings, step, max_points,
+                                              progress=bar.orbit)]
     records = [branch_records(problem, b) for b in branches]
     bifurcations = bifurcation_records(branches)
     files = []
@@ -171,21 +176,70 @@ def _mechanism_unit(rig, parameter: str) -> str:
     return parameter_unit(rig.system, parameter)
 
 
-def _trace(system, parameter, first, last, period, step, max_points, transient, quiet, segments, mechanism=False):
-    """The branch, with a progress bar over the parameter range unless ``quiet``
-    (``system`` a mechanism's rig when ``mechanism``)."""
+def _trace(system, parameter, first, last, period, step, max_points, transient, bar, segments, mechanism=False):
+    """The branch, reporting each orbit to ``bar`` (``system`` a mechanism's rig when
+    ``mechanism``)."""
     from camdyn.continuation.mechanisms import trace_mechanism
     from camdyn.continuation.results import trace_branch
 
     trace = trace_mechanism if mechanism else trace_branch     # the same signature
-    if quiet:
-        return trace(system, parameter, first, last, period, step, max_points, transient, segments=segments)
-    from rich.progress import Progress
+    bar.phase(f"the first orbit ({transient} periods of transient, then Newton's method)")
+    return trace(system, parameter, first, last, period, step, max_points, transient, progress=bar.orbit,
+                 segments=segments)
 
-    with Progress(console=err_console, transient=True) as bar:
-        task = bar.add_task(f"continuing in {parameter}", total=1.0)
 
-        def progress(orbit):
-            bar.update(task, completed=min(max((orbit.parameter - first) / (last - first), 0.0), 1.0))
-        return trace(system, parameter, first, last, period, step, max_points, transient, progress=progress,
-                     segments=segments)
+class _Bar:
+    """The progress of a continuation on standard error (nothing when ``quiet``): what it
+    is doing, the parameter's way through the range, the orbits found and the time
+    taken; after the first orbit, a notice when the point budget at that orbit's cost
+    would take more than :data:`LONG_RUN` seconds."""
+
+    def __init__(self, quiet: bool, parameter: str, unit: str, first: float, last: float, budget: int):
+        self.quiet, self.parameter, self.unit = quiet, parameter, unit
+        self.first, self.last, self.budget = first, last, budget
+        self.count, self.progress, self.task, self.started = 0, None, None, 0.0
+
+    def __enter__(self):
+        import time
+
+        self.started = time.monotonic()
+        if self.quiet:
+            return self
+        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+        self.progress = Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.fields[orbits]} "
+                                 "orbits"), TimeElapsedColumn(), console=err_console, transient=True)
+        self.progress.__enter__()
+        self.task = self.progress.add_task(f"continuing in {self.parameter}", total=1.0, orbits=0)
+        return self
+
+    def __exit__(self, *exc):
+        if self.progress is not None:
+            self.progress.__exit__(*exc)
+        return False
+
+    def phase(self, text: str) -> None:
+        """Say what the continuation does now."""
+        if self.progress is not None and text:
+            self.progress.update(self.task, description=f"{self.parameter}: {text}")
+
+    def orbit(self, orbit) -> None:
+        """One more orbit found."""
+        import time
+
+        self.count += 1
+        if self.count == 1:
+            cost = time.monotonic() - self.started
+            if cost * self.budget > LONG_RUN and not self.quiet:
+                err_console.print(f"note: the first orbit took {cost:.0f} s; up to {self.budget} orbits "
+                                  f"(--max-points, --doublings) may take about {cost * self.budget / 3600:.1f} h. "
+                                  "Ctrl-C stops it.", highlight=False, soft_wrap=True)
+        if self.progress is None:
+            return
+        done = min(max((orbit.parameter - self.first) / (self.last - self.first), 0.0), 1.0)
+        self.progress.update(self.task, completed=done, orbits=self.count,
+                             description=f"{self.parameter} = {orbit.parameter:.6g} {self.unit}")
+
+
+#: A continuation whose point budget at its first orbit's cost exceeds this [s] is announced.
+LONG_RUN = 600.0

@@ -39,6 +39,18 @@ STABILITY_MARGIN = 1e-7
 SAMPLES_PER_PERIOD = 256
 #: Halvings of a multiple-shooting Newton step whose trial states make a run fail.
 HALVINGS = 10
+#: The most steps of one shooting run [-].
+MAX_STEPS = 50_000_000
+#: :func:`find_orbit` stops Newton's method where a variational run from an iterate needs
+#: more than this many times the steps of the first one (and more than
+#: :data:`NEWTON_STEP_FLOOR`): the iterate has left the start's neighbourhood for a state
+#: no orbit near it passes through. On the flexible pivot past its period doubling (16 Hz,
+#: a start on the period-2 attractor) an iterate put the follower 4.7 mm into the cam
+#: (2.7 MN): its variational run took 1.1 million steps (123 s) for a sixteenth of the
+#: period, the first one 2 000 steps for the whole period.
+NEWTON_STEP_FACTOR = 20
+#: The smallest step budget of a variational run of Newton's method [-].
+NEWTON_STEP_FLOOR = 20_000
 
 
 @dataclass(frozen=True)
@@ -65,6 +77,8 @@ class Flow:
         Sample times [s].
     modes : ndarray (samples, mode size)
         The hybrid mode at each sample.
+    steps : int
+        The integrator's steps, accepted and rejected (0 where not counted).
     """
 
     end: np.ndarray
@@ -75,6 +89,7 @@ class Flow:
     states: np.ndarray
     times: np.ndarray
     modes: np.ndarray
+    steps: int = 0
 
 
 @dataclass(frozen=True)
@@ -144,18 +159,20 @@ def _full(problem: Problem, x: np.ndarray, value: float) -> np.ndarray:
     return problem.full_state(x, value)
 
 
-def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samples: int = 0) -> Flow:
+def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samples: int = 0,
+         max_steps: int = MAX_STEPS) -> Flow:
     """Integrate the variational system from unknowns ``x`` at ``t_start`` over
     ``periods`` forcing periods at the scalar parameter ``value`` (default the problem's),
     at the problem's matrix tolerances (:meth:`Problem.matrix_tolerances`; its end state
     is only as accurate as those: residuals come from :func:`shoot`). Raises
-    :class:`SimulationError` if the integrator stops."""
+    :class:`SimulationError` if the integrator stops (after ``max_steps`` steps too)."""
     value = problem.value if value is None else float(value)
     p, period = problem.build(value)
-    return _variational(problem, p, period, x, value, problem.t_start, problem.t_start + periods * period, samples)
+    return _variational(problem, p, period, x, value, problem.t_start, problem.t_start + periods * period, samples,
+                        max_steps)
 
 
-def _variational(problem: Problem, p, period, x, value, t0, t1, samples) -> Flow:
+def _variational(problem: Problem, p, period, x, value, t0, t1, samples, max_steps: int = MAX_STEPS) -> Flow:
     n = problem.template.size
     u = problem.unknowns
     y0 = _full(problem, np.asarray(x, dtype=float), value)
@@ -165,7 +182,7 @@ def _variational(problem: Problem, p, period, x, value, t0, t1, samples) -> Flow
     rtol, atol = problem.matrix_tolerances()
     y, modes, log, counters = driver.integrate(systems.VARIATIONAL + problem.system_id, p, start, t0, t1, times,
                                            rtol, atol, period / 32.0, driver.METHOD_DOP853,
-                                           50_000_000, 100_000, True)
+                                           int(max_steps), 100_000, True)
     limits.check_run(counters, f"shooting run at {problem.name} = {value:g}")
     on_contact = log[:, driver.EVENT_GUARD] == 0
     if not problem.impacts:
@@ -175,7 +192,8 @@ def _variational(problem: Problem, p, period, x, value, t0, t1, samples) -> Flow
     states = y[:, :n]
     matrix = y[-1, n:].reshape(n, n)[:u, :u].copy()
     return Flow(y[-1, :u].copy(), matrix, int(on_contact.sum()), int(counters[driver.COUNT_EVENTS]),
-                _guard_minimum(problem.system_id, p, times, states) if samples else math.nan, states, times, modes)
+                _guard_minimum(problem.system_id, p, times, states) if samples else math.nan, states, times, modes,
+                int(counters[driver.COUNT_ACCEPTED] + counters[driver.COUNT_REJECTED]))
 
 
 def _guard_minimum(system_id: int, p: np.ndarray, times: np.ndarray, states: np.ndarray) -> float:
@@ -298,7 +316,8 @@ def find_orbit(problem: Problem, start=None, value: float | None = None, periods
             raise ParameterError(f"start must be {problem.unknowns} finite numbers")
     eye = np.eye(problem.unknowns)
     residual = np.full(problem.unknowns, math.inf)
-    matrix, previous = None, math.inf
+    matrix, previous, budget = None, math.inf, MAX_STEPS
+    unit = f" {problem.unit}" if problem.unit else ""
     for iteration in range(max_iterations + 1):
         residual = shoot(problem, x, value, periods) - x
         size = float(np.linalg.norm(residual))
@@ -307,14 +326,31 @@ def find_orbit(problem: Problem, start=None, value: float | None = None, periods
             return make_orbit(problem, x, value, periods, run, iteration, size)
         if iteration < max_iterations:
             if matrix is None or not size < 0.25 * previous:      # chord steps while they contract fast
-                matrix = flow(problem, x, value, periods).matrix
+                matrix = _newton_matrix(problem, x, value, periods, budget, iteration, unit)
+                if budget == MAX_STEPS:
+                    budget = max(NEWTON_STEP_FACTOR * matrix.steps, NEWTON_STEP_FLOOR)
+                matrix = matrix.matrix
             previous = size
             x = x + np.linalg.lstsq(matrix - eye, -residual, rcond=None)[0]
-    unit = f" {problem.unit}" if problem.unit else ""
     raise SimulationError(f"no period-{periods} orbit found at {problem.name} = {value:g}{unit}: Newton's "
                           f"method did not converge in {max_iterations} iterations (last residual "
                           f"{float(np.linalg.norm(residual)):.3g}); start closer (a longer transient) or change "
                           f"the parameter")
+
+
+def _newton_matrix(problem: Problem, x, value: float, periods: int, budget: int, iteration: int,
+                   unit: str) -> Flow:
+    """The variational run of Newton's iterate ``x``, at most ``budget`` steps (see
+    :data:`NEWTON_STEP_FACTOR`); past them a :class:`SimulationError` that says so."""
+    try:
+        return flow(problem, x, value, periods, max_steps=budget)
+    except SimulationError as error:
+        if budget == MAX_STEPS:
+            raise
+        raise SimulationError(f"no period-{periods} orbit found at {problem.name} = {value:g}{unit}: Newton's "
+                              f"iterate {iteration} left the start's neighbourhood (its variational run needed "
+                              f"more than {budget} steps, {NEWTON_STEP_FACTOR} times the first one's: {error}); "
+                              "start closer (another transient) or change the parameter") from None
 
 
 def _segment_starts(problem: Problem, start, value: float, times: np.ndarray, transient: int) -> np.ndarray:

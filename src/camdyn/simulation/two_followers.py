@@ -12,6 +12,7 @@ import numpy as np
 import xarray as xr
 
 from camdyn.errors import ParameterError
+from camdyn.model import layout as L
 from camdyn.model import two_followers as pair
 from camdyn.params.system import System
 from camdyn.simulation import limits
@@ -118,7 +119,11 @@ def pack_two_followers(system: System, second: System, placement: float, drive: 
     Returns
     -------
     p : ndarray
-        The parameter vector (:mod:`camdyn.model.two_followers`).
+        The parameter vector (:mod:`camdyn.model.two_followers`). Each follower's
+        viscous contact damping coefficient [N s/m] (a damping law set by a damping
+        ratio) is the single follower's: from its system's static equilibrium at that
+        system's own starting cam angle, not at follower 2's placed one, so that two
+        followers of one system get the same coefficient.
     y0 : ndarray (11,)
         Each follower at its static equilibrium (with the friction of the starting
         speed), the shaft at ``system``'s starting angle and speed, the works zero.
@@ -134,6 +139,12 @@ def pack_two_followers(system: System, second: System, placement: float, drive: 
     first = prepare(system.with_values(**motion) if initial_speed is not None else system)
     theta0 = first.theta0
     other = prepare(second.with_values(**motion, **{"motion.initial_angle": theta0 - phi}))
+    # follower 2's viscous contact damping from its static equilibrium where the single
+    # follower takes it, at its own system's starting cam angle (not at the placed
+    # follower's starting angle ``theta0 - phi``): a follower's damping coefficient is
+    # a property of its system, so two followers of one system get one coefficient
+    reference = prepare(second.with_values(**motion) if initial_speed is not None else second)
+    other.p[L.VISCOUS_C] = reference.viscous_c
     statics = _check_static(static_friction, (system, second))
     p = np.r_[first.p, drive.slots(), phi, statics, np.zeros(pair.MODE_SIZE), other.p]
     assert p.size == pair.SIZE
