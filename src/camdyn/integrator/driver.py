@@ -75,11 +75,13 @@ from camdyn.integrator.events import (
 )
 from camdyn.integrator.inlining import InlinedPipeline
 from camdyn.integrator.interrupt import POLL_STEPS, interrupted
+from camdyn.integrator.nordsieck import ROWS, TIME, adams_accept, adams_step
 from camdyn.integrator.sampling import sample
 from camdyn.integrator.steppers import (
     KIND_DOP853,
     KIND_DP5,
     KIND_HERMITE,
+    KIND_NORDSIECK,
     dop853_error_norm,
     dop853_step,
     dormand_prince_step,
@@ -93,7 +95,7 @@ __all__ = [
     "COUNT_ROSENBROCK", "COUNT_EVENTS", "COUNT_ROOT_ITERATIONS", "COUNT_STATUS", "COUNT_EVENTS_DROPPED",
     "COUNT_SIZE", "COUNTER_NAMES", "STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW",
     "STATUS_NOT_FINITE", "STATUS_ZENO", "STATUS_INTERRUPTED", "STATUS_MESSAGES", "METHOD_AUTO", "METHOD_EXPLICIT",
-    "METHOD_ROSENBROCK", "METHOD_DOP853", "EVENT_TIME", "EVENT_GUARD", "EVENT_NEW_SIGN", "EVENT_MONITOR",
+    "METHOD_ROSENBROCK", "METHOD_DOP853", "METHOD_ADAMS", "EVENT_TIME", "EVENT_GUARD", "EVENT_NEW_SIGN", "EVENT_MONITOR",
     "EVENT_GUARDS", "EVENT_RETRY_ABOVE", "EVENT_RETRY_BELOW", "EVENT_RETRY_LOST", "EVENT_RETRY_MARGIN",
     "EVENT_STEP_FLOOR", "event_columns",
 ]
@@ -102,6 +104,7 @@ METHOD_AUTO = 0  # the system chooses (systems.preferred_method)
 METHOD_EXPLICIT = 1  # Dormand-Prince 5(4)
 METHOD_ROSENBROCK = 2  # RODAS4
 METHOD_DOP853 = 3  # DOP853
+METHOD_ADAMS = 4  # variable-order Adams-Moulton, Nordsieck form, Newton corrector
 
 STEP_ACCEPTED = 0  # verdicts on a trial step
 STEP_RETRY = 1
@@ -133,10 +136,12 @@ def _allocate(system, y_start, n_out, max_events):
 
 @numba.njit(cache=True, inline="always")
 def _workspace(n, m):
-    """Scratch arrays of one run: stepper stages, the Rosenbrock iteration matrix and its
-    pivots, states [n] and guard values [m]."""
+    """Scratch arrays of one run: stepper stages, the Rosenbrock (or Adams-Newton)
+    iteration matrix and its pivots, the Adams history, states [n] and guard values [m]."""
+    history = np.zeros((ROWS, n))
+    history[TIME, 0] = np.nan   # no history yet: the first Adams step starts at order 1
     stage_arrays = (np.empty((6, n)), np.empty((6, n)), np.empty((16, n)), np.empty((7, n)), np.empty(n),
-                    np.zeros(2), np.empty(4), np.empty((n, n)), np.empty(n, dtype=np.int64))
+                    np.zeros(2), np.empty(4), np.empty((n, n)), np.empty(n, dtype=np.int64), history)
     states = (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n))
     guards = (np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m),
               np.empty(m))
@@ -194,7 +199,7 @@ def _next_step(t, h, h_max, t_end, max_steps, counters):
 
 @numba.njit(cache=True, inline="always")
 def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, matrix, pivots, k16, ytmp, y1, f1,
-                err, err3, counters):
+                err, err3, history, counters):
     """One step of ``h`` [s] from ``(t, y)`` by the method chosen for the mode into ``y1``
     (and ``f1`` after an explicit step).
 
@@ -214,6 +219,11 @@ def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, m
         counters[COUNT_JACOBIANS] += 1
         order = 4.0
         e = error_norm(y, y1, err, rtol, atol, systems.controlled_size(system))
+    elif chosen == METHOD_ADAMS:
+        kind = KIND_NORDSIECK
+        e, order, calls = adams_step(system, t, y, f, h, mode, p, history, matrix, pivots, y1, f1, err, rtol, atol,
+                                     counters)
+        counters[COUNT_RHS] += calls
     elif chosen == METHOD_DOP853:
         kind = KIND_DOP853
         counters[COUNT_RHS] += dop853_step(system, t, y, f, h, mode, p, k16, ytmp, y1, f1, err, err3,
@@ -303,6 +313,8 @@ def _advance(system, t, h, t_stop, e, order, y, f, y1, f1, dwork, kind, mode, p,
         gr[i] = gr1[i]
     monitor_max = max(monitor_max, systems.monitor(system, t, y, mode, p))
     h_regime[systems.regime(system, mode, p)] = h
+    if kind == KIND_NORDSIECK:
+        return t, i_out, monitor_max, adams_accept(dwork, t, h)
     factor = 0.9 * e ** (-1.0 / order) if e > 0.0 else 5.0
     h *= min(5.0, max(0.2, factor))
     return t, i_out, monitor_max, h
@@ -331,7 +343,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
         Largest step [s].
     method : int
         0 lets the system choose per mode (``systems.preferred_method``); 1 Dormand-Prince
-        5(4), 2 RODAS4, 3 DOP853.
+        5(4), 2 RODAS4, 3 DOP853, 4 Adams-Moulton of variable order (Nordsieck form).
     max_steps, max_events : int
         Limits on accepted steps and on logged events.
     interruptible : bool
@@ -350,7 +362,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     """
     y_out, mode_out, events, counters, y, mode = _allocate(system, y_start, t_out.shape[0], max_events)
     stage_arrays, states, guards = _workspace(y.shape[0], events.shape[1] - EVENT_GUARDS - y.shape[0])
-    work, stages, k16, f7, err3, h_regime, pts, matrix, pivots = stage_arrays
+    work, stages, k16, f7, err3, h_regime, pts, matrix, pivots, history = stage_arrays
     y1, f, f1, err, ytmp, ymid, yo = states
     g, gr, g1, gr1, gv, grv, g_tmp, gr_tmp = guards
     t = t_start
@@ -369,8 +381,8 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
                 counters[COUNT_STATUS] = STATUS_INTERRUPTED
                 break
         kind, order, e = _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, matrix, pivots,
-                                     k16, ytmp, y1, f1, err, err3, counters)
-        dwork = f7 if kind == KIND_DOP853 else work
+                                     k16, ytmp, y1, f1, err, err3, history, counters)
+        dwork = f7 if kind == KIND_DOP853 else (history if kind == KIND_NORDSIECK else work)
         ready = kind != KIND_DOP853
         h, verdict = _verdict(t, h, e, order, y1, counters)
         if verdict == STEP_RETRY:
