@@ -21,7 +21,7 @@ demo: $(BIN)/.installed
 test: $(BIN)/.installed
 	$(BIN)/ruff check src tests tools benchmarks examples
 	$(BIN)/lint-imports
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q --numprocesses auto --maxprocesses 4 --dist loadfile --durations=15
 
 # the README's and docs' figures from the current code, with the numbers each shows in
 # docs/figures/figures.json (tools/make_figures.py, about 6 minutes; FIGURES_ARGS=--slow adds

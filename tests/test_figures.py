@@ -498,3 +498,29 @@ def test_the_tribology_figures_are_readable(name, tmp_path, figures, record):
     _readable(figures[0])
     if name == "benedict_kelley.png":
         assert _flat(compute()) == pytest.approx(_flat(data), rel=1e-4)
+
+
+def test_a_swept_parameter_over_a_decade_is_drawn_on_a_log_axis_with_cells_meeting_at_geometric_means(
+        tmp_path, monkeypatch):
+    from camdyn.plotting.maps import plot_sweep
+    seen = []
+
+    def hook(fig):
+        ax = fig.axes[0]
+        seen.append((layout_problems(fig), ax.get_xscale(), ax.get_yscale(), ax.collections[0].get_coordinates()))
+    monkeypatch.setattr(style, "SAVE_HOOKS", [hook])
+    stiffness, speed = np.array([2e7, 2e8]), np.array([8.0, 12.0, 16.0])
+    dims = ("pivot.stiffness", "motion.speed")
+    ds = xr.Dataset(coords={"pivot.stiffness": _swept("pivot.stiffness", stiffness, "N/m", "N/m"),
+                            "motion.speed": _swept("motion.speed", speed, "Hz")})
+    ds["status"] = (dims, np.zeros((2, 3), int))
+    ds["regime"] = (dims, np.array([[0, 3, 2], [0, 3, 2]], np.int8), {"units": "1", "long_name": "regime"})
+    plot_sweep(ds, tmp_path / "m.png")
+    problems, xscale, yscale, mesh = seen[0]
+    assert problems == []
+    assert (xscale, yscale) == ("log", "linear")     # the first swept dimension is along x
+    # stiffness cells meet at sqrt(2e7 * 2e8), the outer edges half a decade beyond each
+    # value (never below zero); speed cells meet half-way (6, 10, 14, 18 Hz)
+    root = np.sqrt(10.0)
+    np.testing.assert_allclose(mesh[0, :, 0], [2e7 / root, 2e7 * root, 2e8 * root], rtol=1e-12)
+    np.testing.assert_allclose(mesh[:, 0, 1], [6.0, 10.0, 14.0, 18.0])

@@ -142,7 +142,7 @@ spring.stiffness spring.free_length spring.attachment_x spring.ground_depth spri
 contact.length contact.damping contact.damping_ratio contact.beta contact.exponent contact.restitution
 contact.reference_velocity contact.clip_adhesion friction.law friction.coefficient friction.smoothing
 motion.kind motion.speed motion.amplitude motion.frequency motion.initial_angle motion.direction
-motion.zero_state environment.gravity""".split()
+motion.zero_state motion.start_speed motion.ramp_time environment.gravity""".split()
 
 
 def test_schema_keys_and_units():

@@ -16,6 +16,8 @@ from camdyn.errors import ParameterError
 from camdyn.integrator import driver
 from camdyn.simulation.runner import prepare
 from camdyn.simulation.sensitivity import integrate_variational, state_transition
+from camdyn.simulation.translating import alzate_rig
+from camdyn.simulation.translating_contact import HertzContact
 from camdyn.systems import registry as systems
 
 
@@ -96,20 +98,16 @@ def _central(system_id, p, y0, t0, t1, steps, rtol, atol):
     return np.array(columns).T
 
 
-CH4_OPEN = pytest.mark.xfail(strict=True, reason=(
-    "chapter 4 rig from rest (7 impacts per revolution, viscous law A: the force jumps by c delta_dot at "
-    "onset and separation): 3.7e-6 relative against the differences' best estimate, with the matrix converged "
-    "in rtol (1e-11 to 1e-12: 4e-7) and the differences' scatter near 1e-6; not yet found"))
-
-
+# the chapter 4 rig from rest: the first separation, then seven impacts (onset, peak and
+# separation each) under the viscous law A, whose force jumps by c delta_dot at onset and separation
 @pytest.mark.parametrize("preset, speed, events", [("sundar2014-impact", 16.0, 3),
-                                                   pytest.param("sundar2014-friction", 11.55, 1, marks=CH4_OPEN)])
+                                                   ("sundar2014-friction", 11.55, 22)])
 def test_cam_follower_matrix_matches_finite_differences_of_whole_simulations(preset, speed, events):
     system = camdyn.load_system(preset).with_values(**{"motion.speed": speed})
     prep = prepare(system)
     period = 1.0 / speed
     run = state_transition(system, rtol=1e-11, atol=1e-13)
-    assert run.events >= events                             # onset, peak and separation; or reversals
+    assert run.events >= events
     # steps balance the differences' truncation (the curved flow in alpha) against their noise
     # (the runs' own error, about 1e-10 / step, erratic: a scatter of 3e-6 at 1e-5 rad/s):
     # 1e-7 rad and 3e-5 rad/s
@@ -118,6 +116,44 @@ def test_cam_follower_matrix_matches_finite_differences_of_whole_simulations(pre
     relative = np.abs(run.matrix[:2, :2] - differences[:2]) / scale
     assert relative.max() < 1e-6, relative
     np.testing.assert_array_equal(run.matrix[:, 2], [0.0, 0.0, 1.0])   # the quadrature feeds back into nothing
+
+
+@pytest.mark.parametrize("law", ["hunt-crossley", "lankarani-nikravesh"])
+def test_restitution_law_matrix_carries_the_approach_velocity(law):
+    """The restitution-parameterised laws scale the damping by 1 / v_approach, the
+    penetration rate at the contact's onset, held for the contact: the matrix must carry
+    its variation with the initial state (without it the alpha_dot row was off by 6.7e-2
+    of its column's largest entry under Hunt-Crossley, 5.9e-2 under Lankarani-Nikravesh;
+    with it 5.1e-8 and 7.0e-8)."""
+    system = camdyn.load_system("sundar2014-impact").with_values(
+        **{"motion.speed": 16.0, "contact.damping": law, "contact.restitution": 0.7})
+    prep = prepare(system)
+    period = 1.0 / 16.0
+    run = state_transition(system, rtol=1e-11, atol=1e-13)
+    assert run.events >= 3                                  # separation, an impact's onset, its peak
+    differences = _finite_differences(systems.CAM_FOLLOWER, prep.p, prep.y0, 0.0, period, [1e-7, 3e-5])
+    scale = np.abs(differences).max(axis=0)
+    relative = np.abs(run.matrix[:2, :2] - differences[:2]) / scale
+    assert relative.max() < 1e-6, relative
+
+
+def test_translating_follower_matrix_carries_the_approach_velocity():
+    """The translating follower on the Alzate rig's cam with a Hertz tip under Hunt-Crossley
+    (its mode keeps the approach velocity s_dot - x' of the contact), two revolutions at
+    700 rpm through two contacts, against Richardson-extrapolated central differences of
+    whole simulations (without the approach velocity's derivative: 0.25 of the column's
+    largest entry off; with it 4e-7)."""
+    rig = alzate_rig("hertz", hertz=HertzContact(tip_radius=5e-3, damping_law="hunt-crossley", restitution=0.7))
+    omega = 700.0 * 2.0 * math.pi / 60.0
+    p = rig.pack(omega, math.pi / 2.0)
+    t1 = 2.0 * (2.0 * math.pi / omega)
+    y0 = np.array([0.40 - 1e-5, 0.0])                        # pressed 10 um into the base circle
+    run = integrate_variational(systems.TRANSLATING_FOLLOWER, p, y0, 0.0, t1, rtol=1e-11, atol=1e-13,
+                                max_step=t1 / 64)
+    assert run.events >= 4                                  # two onsets and two separations
+    differences = _finite_differences(systems.TRANSLATING_FOLLOWER, p, y0, 0.0, t1, [1e-7, 1e-5])
+    relative = np.abs(run.matrix - differences) / np.abs(differences).max(axis=0)
+    assert relative.max() < 1e-6, relative
 
 
 def test_sensitivity_refuses_a_state_of_the_wrong_size():

@@ -230,3 +230,22 @@ def test_work_counters(method, per_attempt, per_accepted, jacobians):
         assert c[driver.COUNT_ROSENBROCK] == accepted and c[driver.COUNT_EXPLICIT] == 0
     else:
         assert c[driver.COUNT_EXPLICIT] == accepted and c[driver.COUNT_ROSENBROCK] == 0
+
+
+def test_dop853_error_norm_of_an_exact_step_with_an_underflowing_third_order_estimate_is_zero():
+    # A step that is exact to the last bit (a follower held on a dwell: err5 = 0) whose
+    # third-order estimate is so small that 0.01 e3 underflows to zero: Hairer's norm
+    # h e5 / sqrt(e5 + 0.01 e3) was 0 / 0, and the compiled code raised ZeroDivisionError
+    # out of the driver (a rocking arm run whose end fell on a dwell at 500 rpm).
+    y = np.array([0.3, 0.0])
+    err5 = np.zeros(2)
+    err3 = np.array([1e-173, 0.0])
+    e3 = (err3[0] / 1e-12) ** 2
+    assert e3 > 0.0 and 0.01 * e3 == 0.0    # the underflow the norm meets
+    assert dop853_error_norm(y, y, err5, err3, 1e-3, 0.0, 1e-12, 2) == 0.0
+    # a nonzero fifth-order estimate still gives Hairer's norm, |h| e5 / sqrt((e5 + 0.01 e3) n)
+    err5 = np.array([2e-15, 1e-15])
+    err3 = np.array([4e-14, 0.0])
+    e5, e3 = (2e-6) ** 2 + (1e-6) ** 2, (4e-5) ** 2     # (err / atol) squared, summed
+    expected = 1e-3 * e5 / np.sqrt((e5 + 0.01 * e3) * 2)
+    assert dop853_error_norm(y, y, err5, err3, 1e-3, 0.0, 1e-9, 2) == pytest.approx(expected, rel=1e-12)

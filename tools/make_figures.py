@@ -14,8 +14,16 @@ Jobs (default: all but the slow ones):
 - ``tribology``: ``python examples/tribology_design.py`` -> design maps, contact
   conditions, Benedict-Kelley;
 - ``restitution``: ``python examples/restitution_laws.py`` -> restitution_laws.png;
-- slow (``--slow``, about 20 minutes more): ``friction_tables``, ``impact_tables`` and
-  ``gallery`` (the rest of chapter 2). These scripts also rewrite their tables in docs/.
+- ``mechanisms``: ``python examples/mechanisms.py`` -> mechanisms_speed_fluctuation.png,
+  stick_slip_cycle.png;
+- ``siconos``: ``python examples/siconos_comparison.py`` -> siconos_camfollower.png (from
+  tests/data/siconos_camfollower.json);
+- ``flexible_pivot``: ``python examples/flexible_pivot.py`` -> flexible_pivot_resonance.png;
+- ``two_followers``: ``python examples/two_followers.py`` -> two_followers_stick_slip.png;
+- slow (``--slow``, about 26 minutes more): ``friction_tables``, ``impact_tables``,
+  ``gallery`` (the rest of chapter 2) and ``translating`` (the bifurcation diagram of the
+  translating follower's rig, translating_bifurcation.png). The first three also rewrite
+  their tables in docs/.
 
 ``tribology``, ``friction_tables`` and ``gallery`` record the numbers their figures show
 (``--data``), and restitution_laws.py writes its curves to docs/figures/restitution_laws.json;
@@ -56,6 +64,16 @@ SOURCES = {
     "benedict_kelley.png": "python examples/tribology_design.py",
     "work_precision.png": "make bench-peers (python benchmarks/bench_peers.py)",
     "restitution_laws.png": "python examples/restitution_laws.py",
+    "mechanisms_speed_fluctuation.png": "python examples/mechanisms.py",
+    "stick_slip_cycle.png": "python examples/mechanisms.py",
+    "siconos_camfollower.png": "python examples/siconos_comparison.py",
+    "flexible_pivot_resonance.png": "python examples/flexible_pivot.py",
+    "continuation_curves.png": "camdyn map sundar2014-impact --x cam.runout=1.5mm:3.5mm:9 "
+                               "--y speed=14Hz:17.5Hz:15 --curve period-doubling=16.99Hz",
+    "two_followers_stick_slip.png": "python examples/two_followers.py",
+    "translating_bifurcation.png": "python examples/translating_bifurcation.py",
+    "translating_branches.png": "python examples/translating_bifurcation.py",
+    "translating_branches_358.png": "python examples/translating_bifurcation.py",
     "friction_errors.png": "python examples/friction_error_tables.py",
     "impact_hysteresis.png": "python examples/impact_damping_tables.py",
     "impact_residue_landscape.png": "python examples/impact_damping_tables.py",
@@ -181,6 +199,26 @@ def job_restitution(work: Path) -> dict:
         law: _number(text, rf"{law}: .*?0\.50: ([-+\d.]+) %") for law in laws}}}
 
 
+def job_curves(work: Path) -> dict:
+    """``camdyn map --curve``: the chapter 3 rig's period-doubling curve over (runout, speed)
+    on its brute-force regime map."""
+    import numpy as np
+    import xarray as xr
+
+    result, plot = work / "curves.nc", work / "curves.png"
+    run(camdyn("map", "sundar2014-impact", "--x", "cam.runout=1.5mm:3.5mm:9", "--y", "speed=14Hz:17.5Hz:15",
+               "--curve", "period-doubling=16.99Hz", "--revolutions", 150, "--discard", 100, "--rtol", 1e-9,
+               "--atol", 1e-11, "--out", result, "--plot", plot, "--quiet"), work)
+    shutil.copyfile(plot, FIGURES / "continuation_curves.png")
+    with xr.open_dataset(result) as ds:
+        curve = ds["period_doubling_curve"]
+        return {"continuation_curves.png": {
+            "runout_m": [float(v) for v in ds["cam.runout"].values],
+            "period_doubling_hz": [float(v) for v in curve.values], "stopped": curve.attrs["stopped"],
+            "period_counts": {str(int(k)): int(n) for k, n in zip(*np.unique(ds["period"].values,
+                                                                         return_counts=True))}}}
+
+
 def _script(name: str, figures: tuple[str, ...], args: tuple[str, ...] = (), data: bool = False):
     """A job that runs ``examples/name``; with ``data``, the script's ``--data FILE`` gives
     the numbers each figure shows (recorded in figures.json; the tests draw from them)."""
@@ -196,12 +234,21 @@ def _script(name: str, figures: tuple[str, ...], args: tuple[str, ...] = (), dat
 JOBS = {"demo": job_demo, "sweeps": job_sweeps, "fig2_9": job_fig2_9,
         "tribology": _script("tribology_design.py", tuple(k for k, v in SOURCES.items() if v.endswith("design.py")),
                              data=True),
-        "restitution": job_restitution}
+        "restitution": job_restitution,
+        "mechanisms": _script("mechanisms.py", ("mechanisms_speed_fluctuation.png", "stick_slip_cycle.png"),
+                              data=True),
+        "siconos": _script("siconos_comparison.py", ("siconos_camfollower.png",), data=True),
+        "flexible_pivot": _script("flexible_pivot.py", ("flexible_pivot_resonance.png",), data=True),
+        "curves": job_curves,
+        "two_followers": _script("two_followers.py", ("two_followers_stick_slip.png",), data=True)}
 SLOW = {"friction_tables": _script("friction_error_tables.py", ("friction_errors.png",), data=True),
         "impact_tables": _script("impact_damping_tables.py",
                                  ("impact_hysteresis.png", "impact_residue_landscape.png", "restitution_fit.png")),
         "gallery": _script("chapter2_gallery.py", tuple(k for k, v in SOURCES.items() if v.endswith("gallery.py")),
-                           ("2.4", "2.7", "2.10", "2.14", "2.16"), data=True)}
+                           ("2.4", "2.7", "2.10", "2.14", "2.16"), data=True),
+        "translating": _script("translating_bifurcation.py", ("translating_bifurcation.png",
+                                                                    "translating_branches.png",
+                                                                    "translating_branches_358.png"), data=True)}
 
 
 def sha256(path: Path) -> str:

@@ -4,10 +4,15 @@ For the unmutated source and for each mutant, the script copies ``src/`` to a te
 folder, applies the mutant's exact text replacements to the copy (a replacement whose
 text is not found the expected number of times stops the check: it cannot rot
 silently when the code changes), and runs a fast subset of the tests against the copy
-(``PYTHONPATH`` = the copy, a fresh ``NUMBA_CACHE_DIR`` per variant: numba checks only a
+(``PYTHONPATH`` = the copy, its own ``NUMBA_CACHE_DIR`` per variant: numba checks only a
 compiled function's own file for changes, so a shared cache would hand one variant
-another's machine code). The subprocess reports which ``camdyn`` it imported; a run that
-imported anything but its copy is an error.
+another's machine code). The unmutated copy starts from the checkout's own cache (what
+the test suite compiled, where its sources are unchanged); each mutant's cache then
+starts as a copy of its cache without the entries of the mutated module and of every
+module that imports it, directly or not (found from the copy's import statements), so
+that only code that can see the mistake is compiled again. A stale entry could only hide
+a mistake (a survivor, which fails the check), never fake a kill. The subprocess reports
+which ``camdyn`` it imported; a run that imported anything but its copy is an error.
 
 The unmutated copy must pass the subset and every mutant must fail it. The script
 prints a table (mutant, tests failed, time, verdict) and exits with status 1 if any
@@ -21,11 +26,14 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import ast
+import hashlib
 import os
 import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import xml.etree.ElementTree as ET
 from concurrent.futures import ThreadPoolExecutor
@@ -58,7 +66,29 @@ class Mutant:
 
 OUT = "camdyn/model/outputs.py"
 DYN = "camdyn/model/dynamics.py"
+#: The mutants, those of modules that the integrator compiles first (they compile from
+#: nothing, or nearly), then those of outputs.py (their caches start from the unmutated one).
 MUTANTS = [
+    Mutant("friction moment sign flipped in the equation of motion", DYN, (
+        ("moment += fn * chi + ff * p[L.OFFSET]", "moment += fn * chi - ff * p[L.OFFSET]", 2),
+    )),
+    Mutant("spring arm dx measured along the bar (dx sec alpha)", DYN, (
+        ("        return -fs * p[L.DX]\n", "        return -fs * p[L.DX] / ca\n", 1),
+    )),
+    Mutant("tilted spring: the arm's depth * sin(sigma) part dropped", DYN, (
+        ("return -fs * (p[L.DX] * math.cos(p[L.TILT]) + depth * math.sin(p[L.TILT]))",
+         "return -fs * p[L.DX] * math.cos(p[L.TILT])", 1),
+    )),
+    Mutant("law D: branches swapped (viscous while compressing)", "camdyn/model/contact.py", (
+        ("c = beta * kd * ad if delta_dot > 0.0 else viscous",
+         "c = beta * kd * ad if delta_dot < 0.0 else viscous", 1),
+    )),
+    Mutant("Flores factor 8(1-e)/(5e) replaced by 3(1-e)/(2e)", "camdyn/params/laws.py", (
+        ("    return 1.6 * (1.0 - e) / e\n", "    return 1.5 * (1.0 - e) / e\n", 1),
+    )),
+    Mutant("adhesion clipping ignored", "camdyn/model/contact.py", (
+        ("p[L.V_REFERENCE], p[L.CLIP] > 0.5)", "p[L.V_REFERENCE], p[L.CLIP] > 1.5)", 1),
+    )),
     Mutant("inertia dropped from the pivot reaction and its inverse", OUT, (
         ("nx = m * agx + fn * sa", "nx = fn * sa", 1),
         ("ny = m * agy + fn * ca", "ny = fn * ca", 1),
@@ -75,26 +105,6 @@ MUTANTS = [
         ("+ fn * sa - ff * ca - fs * st", "+ fn * sa + ff * ca - fs * st", 1),
         ("+ fn * ca + ff * sa - fs * ct", "+ fn * ca - ff * sa - fs * ct", 1),
         ("ff[i] = -a * ca + b * sa", "ff[i] = a * ca - b * sa", 1),
-    )),
-    Mutant("friction moment sign flipped in the equation of motion", DYN, (
-        ("moment += fn * chi + ff * p[L.OFFSET]", "moment += fn * chi - ff * p[L.OFFSET]", 2),
-    )),
-    Mutant("spring arm dx measured along the bar (dx sec alpha)", DYN, (
-        ("        return -fs * p[L.DX]\n", "        return -fs * p[L.DX] / ca\n", 1),
-    )),
-    Mutant("tilted spring: the arm's depth * sin(sigma) part dropped", DYN, (
-        ("return -fs * (p[L.DX] * math.cos(p[L.TILT]) + depth * math.sin(p[L.TILT]))",
-         "return -fs * p[L.DX] * math.cos(p[L.TILT])", 1),
-    )),
-    Mutant("law D: branches swapped (viscous while compressing)", "camdyn/model/contact.py", (
-        ("c = p[L.BETA] * kd * ad if delta_dot > 0.0 else p[L.VISCOUS_C]",
-         "c = p[L.BETA] * kd * ad if delta_dot < 0.0 else p[L.VISCOUS_C]", 1),
-    )),
-    Mutant("Flores factor 8(1-e)/(5e) replaced by 3(1-e)/(2e)", "camdyn/params/laws.py", (
-        ("    return 1.6 * (1.0 - e) / e\n", "    return 1.5 * (1.0 - e) / e\n", 1),
-    )),
-    Mutant("adhesion clipping ignored", "camdyn/model/contact.py", (
-        ("if p[L.CLIP] > 0.5 and fn < 0.0:", "if p[L.CLIP] > 1.5 and fn < 0.0:", 1),
     )),
 ]
 
@@ -131,13 +141,91 @@ def make_copy(work: Path, mutant: Mutant | None) -> Path:
     return dest
 
 
-def run_variant(mutant: Mutant | None, keep: bool) -> dict:
-    """Copy, mutate, run the subset; returns name, counts, seconds and the output tail."""
+def importers(src: Path, target: str) -> set[str]:
+    """The files (relative to ``src``) of ``target`` and of every module under ``src``
+    that imports it, directly or through others."""
+    modules = {f.relative_to(src).with_suffix("").as_posix().replace("/", "."): f.relative_to(src).as_posix()
+               for f in src.rglob("*.py")}
+    modules.update({name.removesuffix(".__init__"): path for name, path in list(modules.items())
+                    if name.endswith(".__init__")})
+    imports: dict[str, set[str]] = {}
+    for path in set(modules.values()):
+        found = set()
+        for node in ast.walk(ast.parse((src / path).read_text())):
+            if isinstance(node, ast.Import):
+                found.update(alias.name for alias in node.names)
+            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                found.add(node.module)
+                found.update(f"{node.module}.{alias.name}" for alias in node.names)
+        imports[path] = {modules[m] for m in found if m in modules}
+    stale = {target}
+    while True:
+        more = {path for path, used in imports.items() if used & stale} - stale
+        if not more:
+            return stale
+        stale |= more
+
+
+def cache_folder(src: Path, package: str) -> str:
+    """The sub-folder numba's ``NUMBA_CACHE_DIR`` gives the files of ``src/package``
+    (``numba.core.caching``: the folder's name and the SHA-1 of its absolute path)."""
+    folder = os.path.abspath(src / package)
+    return "_".join([os.path.split(folder)[-1], hashlib.sha1(folder.encode()).hexdigest()])
+
+
+def seed_cache(seed: tuple[Path, Path], src: Path, cache: Path, mutant: Mutant) -> int:
+    """Copy the unmutated copy's cache (``seed`` = its src and cache) into ``cache`` for
+    the copy ``src``, leaving out the entries of the modules that can see the mutant;
+    returns the number of entries copied."""
+    seed_src, seed_cache_dir = seed
+    stale = importers(src, mutant.path)
+    copied = 0
+    for package in sorted({Path(f).parent.as_posix() for f in (p.relative_to(src).as_posix()
+                                                               for p in src.rglob("*.py"))}):
+        old = seed_cache_dir / cache_folder(seed_src, package)
+        if not old.is_dir():
+            continue
+        fresh = {Path(f).stem for f in stale if Path(f).parent.as_posix() == package}
+        new = cache / cache_folder(src, package)
+        new.mkdir(parents=True, exist_ok=True)
+        for entry in old.iterdir():
+            if entry.name.split(".")[0] not in fresh:
+                shutil.copy2(entry, new / entry.name)
+                copied += 1
+    return copied
+
+
+def seed_from_checkout(src: Path, cache: Path) -> int:
+    """Copy the checkout's own numba cache (``src/**/__pycache__``, written by the test
+    suite, which runs first in CI) into ``cache`` for the unmutated copy ``src``; returns
+    the number of entries copied. numba keeps an entry only where the copied source file's
+    time stamp and size match it, and the copy keeps the time stamps."""
+    copied = 0
+    for folder in (ROOT / "src").rglob("__pycache__"):
+        package = folder.parent.relative_to(ROOT / "src").as_posix()
+        entries = [e for e in folder.iterdir() if e.suffix in (".nbi", ".nbc")]
+        if not entries:
+            continue
+        new = cache / cache_folder(src, package)
+        new.mkdir(parents=True, exist_ok=True)
+        for entry in entries:
+            shutil.copy2(entry, new / entry.name)
+            copied += 1
+    return copied
+
+
+def run_variant(mutant: Mutant | None, keep: bool, seed: tuple[Path, Path] | None = None) -> dict:
+    """Copy, mutate, run the subset (a mutant's cache seeded from ``seed``, the unmutated
+    copy's src and cache, when given); returns name, counts, seconds and the output tail."""
     name = "(unmutated)" if mutant is None else mutant.name
     work = Path(tempfile.mkdtemp(prefix="camdyn-mutant-"))
     start = time.perf_counter()
     try:
         src = make_copy(work, mutant)
+        if seed is not None and mutant is not None:
+            seed_cache(seed, src, work / "numba-cache", mutant)
+        elif mutant is None:
+            seed_from_checkout(src, work / "numba-cache")
         env = dict(os.environ, PYTHONPATH=str(src), NUMBA_CACHE_DIR=str(work / "numba-cache"),
                    PYTHONDONTWRITEBYTECODE="1")
         report = work / "report.xml"
@@ -158,11 +246,12 @@ def run_variant(mutant: Mutant | None, keep: bool) -> dict:
         if counts["tests"] == 0:
             raise SetupError(f"{name}: no tests ran\n{out[-3000:]}")
         row = {"name": name, "mutant": mutant is not None, "rc": proc.returncode, **counts, "failed": failed,
-               "seconds": time.perf_counter() - start, "tail": out[-2000:], "camdyn": imported[0]}
+               "seconds": time.perf_counter() - start, "tail": out[-2000:], "camdyn": imported[0],
+               "work": work}
         print(f"  {verdict(row):8s} {row['seconds']:4.0f} s  {name}", flush=True)
         return row
     finally:
-        if not keep:
+        if not keep and mutant is not None:
             shutil.rmtree(work, ignore_errors=True)
 
 
@@ -188,8 +277,32 @@ def main(argv=None) -> int:
             make_copy(Path(tmp), m)
     variants = [None, *mutants]
     print(f"{len(variants)} variants x {len(TESTS)} test selections, {args.jobs} at a time", flush=True)
-    with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        rows = list(pool.map(lambda m: run_variant(m, args.keep), variants))
+    # the mutants start from the unmutated copy's cache, so they wait for it; where the
+    # checkout has no compiled cache (no test run yet) the unmutated copy compiles from
+    # nothing, and the first mutant compiles beside it rather than wait
+    warm = any((ROOT / "src").rglob("__pycache__/*.nbi"))
+    unmutated_done = threading.Event()
+    seed: list = []
+
+    def run(index_and_mutant):
+        index, mutant = index_and_mutant
+        if mutant is None:
+            try:
+                row = run_variant(None, True)
+                seed.append((row["work"] / "src", row["work"] / "numba-cache"))
+                return row
+            finally:
+                unmutated_done.set()
+        if index > 1 or warm:
+            unmutated_done.wait()
+        return run_variant(mutant, args.keep, seed[0] if seed else None)
+
+    try:
+        with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+            rows = list(pool.map(run, enumerate(variants)))
+    finally:
+        if seed and not args.keep:
+            shutil.rmtree(seed[0][0].parent, ignore_errors=True)
     width = max(len(r["name"]) for r in rows)
     print(f"\n{'mutant':<{width}}  {'tests failed':>12}  {'time':>6}  verdict   first failures")
     for r in rows:

@@ -35,9 +35,12 @@ _PARAMETERS = ("Cam", "Contact", "Follower", "Friction", "Motion", "Spring", "Sy
 def __getattr__(name):
     # lazy: importing camdyn (or a compiled submodule, as a sweep's worker process does)
     # neither compiles anything nor imports pint, xarray or SciPy
-    if name in ("load_system", "list_presets"):
+    if name == "load_system":
+        from camdyn.io.system_config import load_system
+        return load_system
+    if name == "list_presets":
         from camdyn.params import config
-        return getattr(config, name)
+        return config.list_presets
     if name in _PARAMETERS:
         from camdyn.params import system
         return getattr(system, name)

@@ -199,6 +199,8 @@ def linearize(system: System, speed=None) -> LinearModel:
     """
     from camdyn.simulation.runner import prepare, with_speed
     system = with_speed(system, speed)
+    if system.profile is not None:
+        raise ParameterError("the linearized model needs the closed-form circular cam, not a cam profile")
     if system.cam.semi_major != system.cam.semi_minor:
         raise ParameterError("the linearized model needs a circular cam (cam.semi_major = cam.semi_minor)")
     concentric = prepare(system.with_values(**{"cam.runout": 0.0}))

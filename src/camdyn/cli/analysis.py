@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import List, Optional
 
+import numpy as np
 import typer
 
 from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, load_source, notice_if_uncached
@@ -15,12 +16,15 @@ from camdyn.errors import ParameterError
 _ALIASES = {"speed": "motion.speed"}
 
 
-def _axis(text: str, option: str) -> dict:
-    """``KEY=START:STOP:COUNT`` or ``KEY=V1,V2,...`` (units as text) -> a [[vary]] table."""
+def _axis(text: str, option: str, mechanism: bool = False) -> dict:
+    """``KEY=START:STOP:COUNT`` or ``KEY=V1,V2,...`` (units as text) -> a [[vary]] table
+    (over a mechanism, ``speed`` is its cam-follower's ``system.motion.speed``)."""
     key, sep, grid = text.partition("=")
     if not sep or not key.strip() or not grid.strip():
         raise ParameterError(f"{option}: expected KEY=START:STOP:COUNT or KEY=V1,V2,..., got {text!r}")
     key = _ALIASES.get(key.strip(), key.strip())
+    if mechanism and key == "motion.speed":
+        key = "system.motion.speed"
     if ":" in grid:
         parts = grid.split(":")
         if len(parts) != 3:
@@ -42,7 +46,8 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
                        revolutions: int = typer.Option(60, help="Cam periods simulated per point."),
                        discard: int = typer.Option(30, help="Of which the first are dropped (transient)."),
                        rtol: float = typer.Option(3e-7, help="Relative tolerance of the integrator."),
-                       atol: float = typer.Option(1e-10, help="Absolute tolerance [rad, rad/s]."),
+                       atol: float = typer.Option(1e-10, help="Absolute tolerance [rad, rad/s] (a mechanism "
+                                                                 "runs with its own)."),
                        out: Path = typer.Option(Path("regime_map.nc"), help="Result file (.nc)."),
                        plot: Optional[Path] = typer.Option(None, help="Figure (default: the result's name, .png)."),
                        workers: Optional[int] = typer.Option(None, help="Worker processes (default every core)."),
@@ -50,16 +55,23 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
                        restart: bool = typer.Option(False, "--restart", help="Discard checkpoints instead of "
                                                                              "resuming."),
                        force: bool = ForceOption,
+                       curve: Optional[List[str]] = typer.Option(
+                           None, "--curve", help="A bifurcation followed over --x by two-parameter continuation "
+                                                 "and drawn on the map: KIND=VALUE, KIND fold, period-doubling, "
+                                                 "grazing or contact-loss, VALUE its --y value at the first --x "
+                                                 "value (e.g. period-doubling=16Hz). Repeatable."),
                        quiet: bool = typer.Option(False, "--quiet", help="No progress bar.")):
     """Regime map over two parameters: every point simulated (contact kept, vr reversal, k
     impacts per revolution, irregular), beside the inverse-kinematics prediction."""
     from camdyn.params.config import parse_assignments
+    from camdyn.params.mechanism import is_mechanism
     from camdyn.plotting import plot_regime_map
     from camdyn.sweeps import spec_from_dict
     from camdyn.sweeps.regime_map import regime_map
 
     check_outputs(netcdf=out, figure=plot or out.with_suffix(".png"), force=force)
-    first, second = _axis(x, "--x"), _axis(y, "--y")
+    mechanism = is_mechanism(source)
+    first, second = _axis(x, "--x", mechanism), _axis(y, "--y", mechanism)
     if first["key"] == second["key"]:
         raise ParameterError("--x and --y vary the same parameter")
     table = {"system": {"source": source, "set": parse_assignments(set_)},
@@ -67,10 +79,26 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
              "run": {"revolutions": revolutions, "discard": discard, "rtol": rtol, "atol": atol},
              "metrics": {"names": ["regime", "impacts", "residual", "max_force"]},
              "output": {"path": str(out)}}
+    if mechanism:   # its own metrics, and the absolute tolerance of its entry
+        del table["metrics"], table["run"]["atol"]
     spec = spec_from_dict(table, name=out.stem)
+    from camdyn.sweeps.execution import check_dask_address
+    from camdyn.sweeps.regime_map import map_curves, parse_curve
+
+    requests = [parse_curve(text, spec) for text in curve or []]
+
+    check_dask_address(dask)   # before the compile notice: bad input is refused before any work
     notice_if_uncached(sweeps=True)
     ds = regime_map(spec, workers=workers, dask=dask, progress=not quiet, restart=restart,
                     echo=lambda msg: console.print(msg, markup=False, highlight=False, soft_wrap=True))
+    for kind, guess in requests:
+        console.print(f"following the {kind} from {spec.vary[1].key} = {guess:.6g} {spec.vary[1].unit} over "
+                      f"{spec.vary[0].key} ...", highlight=False, soft_wrap=True)
+    if requests:
+        ds = map_curves(spec, ds, requests)
+        for name in (v for v in ds.data_vars if "curve_kind" in ds[v].attrs):
+            console.print(f"{ds[name].attrs['curve_kind']}: {int(np.isfinite(ds[name].values).sum())} points; "
+                          f"{ds[name].attrs['stopped']}", highlight=False, soft_wrap=True)
     announce(out)
     announce(plot_regime_map(ds, plot or out.with_suffix(".png")))
     a = {k[len("agreement_"):]: ds.attrs[k] for k in ds.attrs if k.startswith("agreement_")}

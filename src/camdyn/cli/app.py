@@ -12,12 +12,13 @@ import functools
 import os
 import signal
 import sys
+import threading
 import warnings
 
 import typer
 
 from camdyn import __version__
-from camdyn.cli import analysis, impact, records, simulate, sweep
+from camdyn.cli import analysis, continuation, impact, records, simulate, sweep
 from camdyn.cli.common import compile_notice
 from camdyn.errors import RUNTIME_ERRORS, CamdynError, SweepInterrupted
 
@@ -28,7 +29,7 @@ except ImportError:  # pragma: no cover
 
 #: The interrupt of the current command: its signal and, for a sweep, the exception that
 #: says how to resume (typer turns KeyboardInterrupt into exit status 130 and drops it).
-_interrupt = {"signal": signal.SIGINT, "exception": None, "arrived": False}
+_interrupt = {"signal": signal.SIGINT, "exception": None, "arrived": False, "active": False, "later": None}
 
 
 def _interruptible(command):
@@ -87,6 +88,7 @@ app.command("bifurcation")(_interruptible(sweep.bifurcation))
 app.command("lyapunov")(_interruptible(sweep.lyapunov))
 app.command("map")(_interruptible(analysis.regime_map_command))
 app.command("spectrum")(_interruptible(analysis.spectrum))
+app.command("continue")(_interruptible(continuation.continue_branch))
 
 
 def _on_signal(signum, frame):
@@ -99,14 +101,34 @@ def _on_signal(signum, frame):
     raise KeyboardInterrupt
 
 
+#: Delay [s] before an interrupt swallowed in the main thread is delivered again.
+REDELIVERY_DELAY = 0.01
+
+
 def _quiet_unraisable(unraisable) -> None:
     """Drop the 'Exception ignored' report of an interrupt inside a C callback, and deliver
     the interrupt again to the main thread (the callback swallowed it: the command would
-    otherwise run on to its end)."""
+    otherwise run on to its end). In the main thread itself the delivery waits until this
+    hook has returned: a signal handler run inside the hook would raise there, where
+    Python ignores the exception and prints it with its traceback."""
     if not isinstance(unraisable.exc_value, KeyboardInterrupt):
         sys.__unraisablehook__(unraisable)
     elif _interrupt["arrived"]:
-        _thread.interrupt_main(int(_interrupt["signal"]))
+        number = int(_interrupt["signal"])
+        if threading.current_thread() is threading.main_thread():
+            later = threading.Timer(REDELIVERY_DELAY, _deliver, args=(number,))
+            later.daemon = True
+            _interrupt["later"] = later
+            later.start()
+        else:
+            _thread.interrupt_main(number)
+
+
+def _deliver(number: int) -> None:
+    """The interrupt, delivered to the main thread while a command still runs (not once
+    :func:`main` has restored the previous handlers and is reporting how it ended)."""
+    if _interrupt["active"]:
+        _thread.interrupt_main(number)
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
@@ -129,7 +151,7 @@ def main(argv=None) -> int:
     error); 130 interrupted by Ctrl-C (143 by SIGTERM). Set ``CAMDYN_DEBUG=1`` to see the
     traceback of an unexpected error.
     """
-    _interrupt.update(signal=signal.SIGINT, exception=None, arrived=False)
+    _interrupt.update(signal=signal.SIGINT, exception=None, arrived=False, active=True, later=None)
     hooks = warnings.showwarning, sys.unraisablehook
     warnings.showwarning, sys.unraisablehook = _show_warning, _quiet_unraisable
     previous = {}
@@ -167,6 +189,9 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return 1
     finally:
+        _interrupt["active"] = False
+        if _interrupt["later"] is not None:
+            _interrupt["later"].cancel()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         warnings.showwarning, sys.unraisablehook = hooks

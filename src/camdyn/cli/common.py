@@ -15,7 +15,8 @@ import typer
 from rich.console import Console
 
 from camdyn.errors import ParameterError
-from camdyn.params.config import load_system, parse_assignments
+from camdyn.io.system_config import load_system
+from camdyn.params.config import parse_assignments
 from camdyn.params.units import parse_quantity, parse_speed
 
 #: Results and tables (standard output); messages that must not mix with JSON go to ``err_console``.

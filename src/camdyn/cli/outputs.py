@@ -135,3 +135,24 @@ def emit_json(command: str, summary: dict, **details) -> dict:
     document = {"schema": f"camdyn.{command}/{SCHEMA_VERSION}", "summary": summary, **details}
     print_json(document)
     return document
+
+
+def report_run(ds, summary: dict, command: str, show, out: Path | None, json_out: bool, plot: Path | None = None,
+               draw=None, details: tuple = ("solver",)) -> None:
+    """The end of a ``simulate`` command: ``show(summary)`` (a table; not with ``--json``),
+    the result ``ds`` written to ``out`` and the figure ``draw(ds, plot)``, each where
+    asked and announced, then with ``--json`` the document of ``command`` whose
+    ``details`` keys leave the summary for entries of their own."""
+    if not json_out:
+        show(summary)
+    files = []
+    if out is not None:
+        from camdyn.io.netcdf import save_netcdf
+        save_netcdf(ds, out)
+        files.append(announce(out, json_out))
+    if plot is not None:
+        draw(ds, plot)
+        files.append(announce(plot, json_out))
+    if json_out:
+        emit_json(command, {k: v for k, v in summary.items() if k not in details},
+                  **{k: summary[k] for k in details}, files=files)

@@ -10,13 +10,16 @@ import typer
 from rich.table import Table
 
 from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, load_source
-from camdyn.cli.outputs import announce, check_outputs, emit_json
+from camdyn.cli.outputs import check_outputs, emit_json, report_run
+from camdyn.errors import ParameterError
 from camdyn.params.config import (
     SCHEMA,
     list_presets,
     preset_text,
     system_to_toml,
 )
+from camdyn.params.mechanism import is_mechanism
+from camdyn.params.profiles import declared_kind, is_translating, list_translating_presets, translating_preset_text
 from camdyn.params.units import parse_quantity, parse_speed
 
 
@@ -29,12 +32,23 @@ def presets_list(ctx: typer.Context):
     for name in list_presets():
         meta = tomllib.loads(preset_text(name)).get("preset", {})
         table.add_row(name, meta.get("description", ""))
+    for name in list_translating_presets():
+        meta = tomllib.loads(translating_preset_text(name)).get("preset", {})
+        table.add_row(name, meta.get("description", ""))
     console.print(table)
 
 
 def presets_show(name: str):
-    """Print a preset as TOML (copy it to start your own configuration)."""
-    typer.echo(preset_text(name) if name in list_presets() else system_to_toml(load_source(name)))
+    """Print a preset as TOML (copy it to start your own configuration); a mechanism's
+    file is printed whole, its system included, every key in SI units."""
+    if is_mechanism(name):
+        from camdyn.cli.mechanism import show_mechanism
+        typer.echo(show_mechanism(name))
+        return
+    if name in list_translating_presets():
+        typer.echo(translating_preset_text(name))
+        return
+    typer.echo(preset_text(name) if name in list_presets() else system_to_toml(load_source(name, None)))
 
 
 def presets_keys():
@@ -144,32 +158,46 @@ def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              out: Optional[Path] = typer.Option(None, help="Write the results to this netCDF file (.nc)."),
              plot: Optional[Path] = typer.Option(None, help="Write a time-history figure (.png, .pdf, .svg, ...)."),
              method: str = typer.Option("auto", help="auto, explicit or rosenbrock."),
-             rtol: float = typer.Option(1e-8, help="Relative tolerance."),
+             rtol: Optional[float] = typer.Option(None, help="Relative tolerance (default 1e-8; 1e-10 for a "
+                                                            "translating follower)."),
              force: bool = ForceOption,
              json_out: bool = JsonOption):
-    """Simulate the follower and summarise the response."""
+    """Simulate the follower and summarise the response.
+
+    A configuration whose [follower] says kind = "translating" (or the preset alzate) is a
+    translating follower on a cam profile, kind = "rocking" a rocking roller or knife edge
+    on one (docs/profiles.md). A file with a [mechanism] table is a mechanism: the cam
+    on a driven shaft, the follower on a flexible pivot, or two followers on one cam
+    (docs/mechanisms.md)."""
     from camdyn.simulation.runner import simulate as run
     check_outputs(netcdf=out, figure=plot, force=force)
+    if is_mechanism(source):
+        from camdyn.cli.mechanism import simulate_mechanism_command
+        simulate_mechanism_command(source, set_, speed, revolutions, sample_rate, out, plot, method, rtol, json_out)
+        return
+    if is_translating(source):
+        from camdyn.cli.translating import simulate_translating_command
+        simulate_translating_command(source, set_, speed, revolutions, sample_rate, out, plot, method, rtol, json_out)
+        return
+    if declared_kind(source) == "rocking":
+        from camdyn.cli.rocking import simulate_rocking_command
+        simulate_rocking_command(source, set_, speed, revolutions, sample_rate, out, plot, method, rtol, json_out)
+        return
+    if declared_kind(source) is not None:
+        raise ParameterError(f"{source}: follower.kind is {declared_kind(source)!r}; write 'translating' for a "
+                             "translating follower, 'rocking' for a rocking roller or knife edge, or leave it "
+                             "out for the rocking flat-faced one")
+    rtol = 1e-8 if rtol is None else rtol
     system = load_source(source, set_)
     fs = parse_quantity(sample_rate, "Hz", "--sample-rate")
     if speed is not None:
         speed = parse_speed(speed, "--speed")
     ds = run(system, speed=speed, revolutions=revolutions, sample_rate=fs, method=method, rtol=rtol)
     summary = _summary(ds)
-    if not json_out:
-        _print_summary(summary)
-    files = []
-    if out is not None:
-        from camdyn.io.netcdf import save_netcdf
-        save_netcdf(ds, out)
-        files.append(announce(out, json_out))
+    draw = None
     if plot is not None:
-        from camdyn.plotting import plot_time_history
-        plot_time_history(ds, plot)
-        files.append(announce(plot, json_out))
-    if json_out:
-        emit_json("simulate", {k: v for k, v in summary.items() if k not in _DETAILS},
-                  last_impact=summary["last_impact"], solver=summary["solver"], files=files)
+        from camdyn.plotting import plot_time_history as draw
+    report_run(ds, summary, "simulate", _print_summary, out, json_out, plot, draw, _DETAILS)
 
 
 def demo(out: Path = typer.Option(Path("out"), help="Folder for the figures and results (about 80 MB)."),

@@ -8,7 +8,15 @@ from typing import List, Optional
 
 import typer
 
-from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, notice_if_uncached, parse_grid
+from camdyn.cli.common import (
+    ForceOption,
+    JsonOption,
+    SetOption,
+    console,
+    err_console,
+    notice_if_uncached,
+    parse_grid,
+)
 from camdyn.cli.outputs import announce, check_outputs, emit_json
 from camdyn.sweeps.metrics import REGIMES
 
@@ -28,7 +36,8 @@ def sweep(spec_path: Path = typer.Argument(..., metavar="SPEC.toml", help="Sweep
           no_plot: bool = typer.Option(False, "--no-plot", help="Write no figure."),
           force: bool = typer.Option(False, "--force", help="Overwrite an existing result and figure (checkpoints "
                                                             "are resumed, or discarded with --restart)."),
-          quiet: bool = typer.Option(False, "--quiet", help="No progress bar.")):
+          quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
+          json_: bool = JsonOption):
     """Run a parameter sweep; resume it from its checkpoints if it was interrupted.
 
     A relative result path in the spec (its output table) is taken relative to the
@@ -43,22 +52,34 @@ def sweep(spec_path: Path = typer.Argument(..., metavar="SPEC.toml", help="Sweep
         spec = dataclasses.replace(spec, output=out)
     figure = None if no_plot else plot or spec.output.with_suffix(".png")
     check_outputs(netcdf=spec.output, figure=figure, force=force)
+    from camdyn.sweeps.execution import check_dask_address
+
+    check_dask_address(dask)   # before the compile notice: bad input is refused before any work
     notice_if_uncached(sweeps=True)
-    ds = run_sweep(spec, workers=workers, dask=dask, threads=threads, progress=not quiet, restart=restart,
-                   keep_parts=keep_parts, echo=_echo)
+    ds = run_sweep(spec, workers=workers, dask=dask, threads=threads, progress=not (quiet or json_),
+                   restart=restart, keep_parts=keep_parts, echo=_echo_err if json_ else _echo)
     failed = int((ds["status"] != 0).sum())
-    announce(spec.output, detail=f": {spec.points} points, {failed} failed")
-    if failed:
-        reasons = sorted(set(str(r) for r in ds["failure"].values.ravel() if str(r)))
-        for reason in reasons[:5]:
-            console.print(f"  failed: {reason}", highlight=False, soft_wrap=True)
+    files = [announce(spec.output, json_, detail=f": {spec.points} points, {failed} failed")]
+    reasons = sorted(set(str(r) for r in ds["failure"].values.ravel() if str(r)))
+    for reason in reasons[:5]:
+        (err_console if json_ else console).print(f"  failed: {reason}", highlight=False, soft_wrap=True)
     if figure is not None:
-        announce(plot_sweep(ds, figure))
+        files.append(announce(plot_sweep(ds, figure), json_))
+    if json_:
+        summary = {"points": spec.points, "failed": failed, "mechanism": spec.mechanism or None}
+        if "regime" in ds:
+            summary["regimes"] = {name: int((ds["regime"] == code).sum()) for code, name in REGIMES.items()}
+        emit_json("sweep", summary, swept={v.key: v.unit for v in spec.vary}, metrics=list(spec.metrics),
+                  failures=reasons[:5], files=files)
     ds.close()
 
 
 def _echo(message: str) -> None:
     console.print(message, markup=False, highlight=False, soft_wrap=True)
+
+
+def _echo_err(message: str) -> None:
+    err_console.print(message, markup=False, highlight=False, soft_wrap=True)
 
 
 def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
@@ -75,12 +96,19 @@ def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                 force: bool = ForceOption,
                 quiet: bool = typer.Option(False, "--quiet", help="No progress bar.")):
     """Bifurcation diagram over cam speed: Poincare samples once per revolution, impacts per
-    revolution, period and regime (a sweep; see 'camdyn sweep' for the general form)."""
+    revolution, period and regime (a sweep; see 'camdyn sweep' for the general form). For a
+    translating follower (preset alzate, or [follower] kind = "translating"): its state at
+    cam angle 0 of each revolution after --discard, in one process (docs/profiles.md)."""
     from camdyn.params.config import parse_assignments
+    from camdyn.params.profiles import is_translating
     from camdyn.plotting import plot_sweep
     from camdyn.sweeps import run_sweep, spec_from_dict
 
     check_outputs(netcdf=out, figure=plot or out.with_suffix(".png"), force=force)
+    if is_translating(source):
+        from camdyn.cli.translating import bifurcation_translating_command
+        bifurcation_translating_command(source, set_, speeds, revolutions, discard, out, plot, workers, dask, quiet)
+        return
     grid = parse_grid(speeds, "--speeds", "Hz")
     table = {"system": {"source": source, "set": parse_assignments(set_)},
              "vary": [{"key": "motion.speed", "values": [float(v) for v in grid]}],
@@ -88,6 +116,9 @@ def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              "metrics": {"names": ["poincare", "impacts", "regime", "residual", "max_force"]},
              "output": {"path": str(out)}}
     spec = spec_from_dict(table, name=out.stem)
+    from camdyn.sweeps.execution import check_dask_address
+
+    check_dask_address(dask)   # before the compile notice: bad input is refused before any work
     notice_if_uncached(sweeps=True)
     ds = run_sweep(spec, workers=workers, dask=dask, progress=not quiet, restart=restart, echo=_echo)
     announce(out)
@@ -102,22 +133,42 @@ def lyapunov(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              speed: str = typer.Option(..., help="Cam speed, e.g. 18Hz or 1080rpm."),
              revolutions: int = typer.Option(400, help="Cam periods averaged."),
              transient: int = typer.Option(200, help="Cam periods dropped first."),
+             spectrum: bool = typer.Option(False, "--spectrum", help="Also both exponents from the variational "
+                                                                     "equations with saltation [1/s]."),
              json_: bool = JsonOption):
     """Largest Lyapunov exponent of the steady motion at one speed (two nearby trajectories
-    through every impact, renormalised once per revolution)."""
+    through every impact, renormalised once per revolution); with --spectrum also the
+    whole spectrum from the state-transition matrix, re-orthonormalised once per revolution."""
     from camdyn.analysis.chaos import lyapunov_exponent
     from camdyn.cli.common import load_source
     from camdyn.params.units import parse_speed
 
-    result = lyapunov_exponent(load_source(source, set_), speed=parse_speed(speed), revolutions=revolutions,
-                               transient=transient)
+    system = load_source(source, set_)
+    hz = parse_speed(speed)
+    result = lyapunov_exponent(system, speed=hz, revolutions=revolutions, transient=transient)
     half = result.running[revolutions // 2 - 1] if revolutions >= 2 else float("nan")
+    full = None
+    if spectrum:
+        from camdyn.analysis.lyapunov import lyapunov_spectrum
+        full = lyapunov_spectrum(system, speed=hz, revolutions=revolutions, transient=transient)
     if json_:
-        emit_json("lyapunov", {"speed_hz": result.speed, "exponent_per_s": result.exponent,
-                               "per_revolution": result.per_revolution, "chaotic": bool(result.exponent > 0)},
-                  exponent_half_record_per_s=float(half), revolutions=revolutions, transient=transient)
+        summary = {"speed_hz": result.speed, "exponent_per_s": result.exponent,
+                   "per_revolution": result.per_revolution, "chaotic": bool(result.exponent > 0)}
+        details = {}
+        if full is not None:
+            summary.update(spectrum_per_s=[float(x) for x in full.exponents],
+                           spectrum_per_revolution=[float(x) for x in full.per_period],
+                           spectrum_sum_per_s=full.total)
+            details = {"kaplan_yorke_dimension": full.kaplan_yorke_dimension, "spectrum_events": full.events}
+        emit_json("lyapunov", summary, exponent_half_record_per_s=float(half), revolutions=revolutions,
+                  transient=transient, **details)
         return
     verdict = "chaotic" if result.exponent > 0 else "not chaotic (attracting)"
     console.print(f"largest Lyapunov exponent at {result.speed:g} Hz: {result.exponent:.4g} 1/s "
                   f"({result.per_revolution:.4g} per revolution; {float(half):.4g} 1/s over the first half): "
                   f"{verdict}", highlight=False, soft_wrap=True)
+    if full is not None:
+        values = ", ".join(f"{x:.4g}" for x in full.exponents)
+        console.print(f"Lyapunov spectrum (variational equations with saltation): {values} 1/s; sum "
+                      f"{full.total:.4g} 1/s; Kaplan-Yorke dimension {full.kaplan_yorke_dimension:.3g}",
+                      highlight=False, soft_wrap=True)

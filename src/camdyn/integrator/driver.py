@@ -320,6 +320,22 @@ def _advance(system, t, h, t_stop, e, order, y, f, y1, f1, dwork, kind, mode, p,
     return t, i_out, monitor_max, h
 
 
+@numba.njit(cache=True, inline="always")
+def _fill_end(t, y, mode, t_out, i_out, y_out, mode_out, counters):
+    """Fill the output times within the resolution of time past ``t`` [s] with the state
+    there, after a completed run: an event cut a hair before the end (a joint of a cam
+    profile at the end of a revolution) leaves a step too short to take, and its output
+    time unfilled. Returns the next index."""
+    while (counters[COUNT_STATUS] == STATUS_OK and i_out < t_out.shape[0]
+           and t_out[i_out] - t <= 4e-16 * max(1.0, abs(t))):
+        for i in range(y.shape[0]):
+            y_out[i_out, i] = y[i]
+        for i in range(mode.shape[0]):
+            mode_out[i_out, i] = mode[i]
+        i_out += 1
+    return i_out
+
+
 @numba.njit(cache=True, pipeline_class=InlinedPipeline)
 def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, method, max_steps,
               max_events, interruptible=False):
@@ -410,4 +426,5 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             t, i_out, monitor_max, h = _advance(system, t, h, t_end if last else t + h, e, order, y, f, y1, f1,
                                                 dwork, kind, mode, p, k16, ytmp, f7, yo, g, gr, g1, gr1, t_out, i_out,
                                                 y_out, mode_out, monitor_max, h_regime, ready, counters)
+    i_out = _fill_end(t, y, mode, t_out, i_out, y_out, mode_out, counters)
     return y_out, mode_out, events[:n_events].copy(), counters

@@ -299,9 +299,10 @@ def dop853_error_norm(y0, y1, err5, err3, h, rtol, atol, controlled):
         sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
         e5 += (err5[i] / sc) ** 2
         e3 += (err3[i] / sc) ** 2
-    if e5 == 0.0 and e3 == 0.0:
+    denominator = math.sqrt((e5 + 0.01 * e3) * controlled)
+    if denominator == 0.0:   # both estimates zero, or e5 zero and 0.01 e3 below the smallest float
         return 0.0
-    return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * controlled)
+    return abs(h) * e5 / denominator
 
 
 @numba.njit(cache=True)

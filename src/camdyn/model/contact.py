@@ -25,8 +25,8 @@ from camdyn.model import layout as L
 from camdyn.params.laws import FIRST_RESTITUTION_CODE, LAWS, lookup
 
 __all__ = [
-    "hertz_point_coefficient", "hertz_line_coefficient", "equivalent_radius",
-    "restitution_factor", "hunt_crossley_beta", "contact_force",
+    "effective_modulus", "stiffness_at", "damped_force", "hertz_point_coefficient", "hertz_line_coefficient",
+    "equivalent_radius", "restitution_factor", "hunt_crossley_beta", "contact_force",
 ]
 
 
@@ -106,15 +106,122 @@ def _factor(code, e):
     return _hu_guo(e)
 
 
+def effective_modulus(cam_modulus: float, cam_poisson: float, follower_modulus: float,
+                      follower_poisson: float) -> float:
+    """Contact modulus ``E*`` [Pa]: ``1/E* = (1-nu_c^2)/Y_c + (1-nu_b^2)/Y_b`` (eq 2.13, 3.12;
+    K. L. Johnson, *Contact Mechanics*, 1985, eq 4.22).
+
+    Parameters
+    ----------
+    cam_modulus, follower_modulus : float
+        Young's moduli ``Y_c`` and ``Y_b`` [Pa].
+    cam_poisson, follower_poisson : float
+        Poisson's ratios ``nu_c`` and ``nu_b`` [-].
+    """
+    return 1.0 / ((1 - cam_poisson ** 2) / cam_modulus + (1 - follower_poisson ** 2) / follower_modulus)
+
+
 @numba.njit(cache=True, inline="always")
-def contact_force(delta, delta_dot, rho_c, approach, p):
-    """Normal force on the follower [N] while in contact.
+def stiffness_at(line, modulus, radius, length, delta):
+    """Secant stiffness ``k(delta) = F_k / delta`` [N/m] of the Hertz law: line contact
+    ``(pi/4) E* l`` (eq 2.14), point contact ``(4/3) E* sqrt(rho_e) |delta|^0.5`` (eq 3.11).
+
+    Parameters
+    ----------
+    line : bool
+        True for line contact, False for point contact.
+    modulus : float
+        Effective modulus ``E*`` [Pa].
+    radius : float
+        Equivalent radius ``rho_e`` [m] (point contact).
+    length : float
+        Contact length ``l`` [m] (line contact).
+    delta : float
+        Penetration [m].
+    """
+    if not line:
+        k = 4.0 / 3.0 * modulus * math.sqrt(radius)
+        return k * math.sqrt(abs(delta))
+    return 0.25 * math.pi * modulus * length
+
+
+@numba.njit(cache=True, inline="always")
+def damped_force(delta, delta_dot, kd, approach, code, viscous, beta, exponent, restitution, v_reference, clip):
+    """Normal force ``F_k + F_d`` [N] of the Hertz spring with secant stiffness ``kd`` and
+    the damping law ``code`` (a row of :data:`camdyn.params.laws.TABLE`).
 
     Parameters
     ----------
     delta : float
-        Penetration [m]. Negative values (a step overshooting separation) use the
-        odd continuation ``sgn(delta)|delta|^nH`` so the force stays smooth.
+        Penetration [m]; negative values (a step overshooting separation) use the odd
+        continuation ``sgn(delta)|delta|^nH`` so the force stays smooth.
+    delta_dot : float
+        Penetration rate [m/s].
+    kd : float
+        Secant stiffness ``k(delta) = F_k / delta`` [N/m] (:func:`stiffness_at`).
+    approach : float
+        Approach velocity of this contact [m/s] (restitution laws).
+    code : int
+        Code of the damping law.
+    viscous : float
+        ``c`` of laws A, D and E [N s/m].
+    beta, exponent : float
+        ``beta`` [law-dependent unit] and ``n`` [-] of laws B-E and the power law.
+    restitution : float
+        Coefficient of restitution ``e`` [-] of the restitution laws.
+    v_reference : float
+        Smallest approach velocity used by the restitution laws [m/s].
+    clip : bool
+        True clips a pulling (negative) force to zero.
+
+    Returns
+    -------
+    fn : float
+        Normal force ``F_k + F_d`` [N].
+    fk : float
+        Elastic part ``F_k`` [N].
+    """
+    ad = abs(delta)
+    fk = kd * delta
+    c = 0.0
+    if code == VISCOUS:
+        c = viscous
+    elif code == STIFFNESS_PROPORTIONAL:  # c = beta F_k(delta): beta [s/m] times a force (see docs/model.md)
+        c = beta * kd * ad
+    elif code == ZHANG_WHITEN:
+        c = beta * ad ** 0.25
+    elif code == STIFFNESS_PROPORTIONAL_VISCOUS:
+        # D and E switch on the sign of delta_dot itself: F_d = c delta_dot is continuous
+        # there, so the switch needs no event (an event on delta_dot would chatter on
+        # rounding noise in sustained stiff contact)
+        c = beta * kd * ad if delta_dot > 0.0 else viscous
+    elif code == ZHANG_WHITEN_VISCOUS:
+        c = beta * ad ** 0.25 if delta_dot > 0.0 else viscous
+    elif code == POWER:
+        if exponent == 1.5:
+            c = beta * ad * math.sqrt(ad)
+        elif exponent == 0.0:
+            c = beta
+        else:
+            c = beta * ad ** exponent
+    elif code >= FIRST_RESTITUTION_CODE:
+        v = max(approach, v_reference)
+        c = _factor(code, restitution) * kd * ad / v   # chi(e) K delta^nH / v
+    fn = fk + c * delta_dot
+    if clip and fn < 0.0:
+        fn = 0.0
+    return fn, fk
+
+
+@numba.njit(cache=True, inline="always")
+def contact_force(delta, delta_dot, rho_c, approach, p):
+    """Normal force on the rocking follower [N] while in contact: :func:`damped_force`
+    with the coefficients of the parameter vector ``p`` (:mod:`camdyn.model.layout`).
+
+    Parameters
+    ----------
+    delta : float
+        Penetration [m] (negative values: the odd continuation of :func:`damped_force`).
     delta_dot : float
         Penetration rate [m/s].
     rho_c : float
@@ -131,42 +238,8 @@ def contact_force(delta, delta_dot, rho_c, approach, p):
     fk : float
         Elastic part ``F_k`` [N].
     """
-    ad = abs(delta)
-    if p[L.CONTACT_KIND] == 0.0:
-        rho_e = equivalent_radius(rho_c, p[L.PIN])
-        k = 4.0 / 3.0 * p[L.ESTAR] * math.sqrt(rho_e)
-        kd = k * math.sqrt(ad)          # k(delta) = F_k / delta
-    else:
-        k = 0.25 * math.pi * p[L.ESTAR] * p[L.LINE_LENGTH]
-        kd = k
-    fk = kd * delta
-    code = int(p[L.DAMPING_LAW])
-    c = 0.0
-    if code == VISCOUS:
-        c = p[L.VISCOUS_C]
-    elif code == STIFFNESS_PROPORTIONAL:  # c = beta F_k(delta): beta [s/m] times a force (see docs/model.md)
-        c = p[L.BETA] * kd * ad
-    elif code == ZHANG_WHITEN:
-        c = p[L.BETA] * ad ** 0.25
-    elif code == STIFFNESS_PROPORTIONAL_VISCOUS:
-        # D and E switch on the sign of delta_dot itself: F_d = c delta_dot is continuous
-        # there, so the switch needs no event (an event on delta_dot would chatter on
-        # rounding noise in sustained stiff contact)
-        c = p[L.BETA] * kd * ad if delta_dot > 0.0 else p[L.VISCOUS_C]
-    elif code == ZHANG_WHITEN_VISCOUS:
-        c = p[L.BETA] * ad ** 0.25 if delta_dot > 0.0 else p[L.VISCOUS_C]
-    elif code == POWER:
-        n = p[L.EXPONENT]
-        if n == 1.5:
-            c = p[L.BETA] * ad * math.sqrt(ad)
-        elif n == 0.0:
-            c = p[L.BETA]
-        else:
-            c = p[L.BETA] * ad ** n
-    elif code >= FIRST_RESTITUTION_CODE:
-        v = max(approach, p[L.V_REFERENCE])
-        c = _factor(code, p[L.RESTITUTION]) * kd * ad / v   # chi(e) K delta^nH / v
-    fn = fk + c * delta_dot
-    if p[L.CLIP] > 0.5 and fn < 0.0:
-        fn = 0.0
-    return fn, fk
+    line = p[L.CONTACT_KIND] != 0.0
+    rho_e = 0.0 if line else equivalent_radius(rho_c, p[L.PIN])
+    kd = stiffness_at(line, p[L.ESTAR], rho_e, p[L.LINE_LENGTH], delta)
+    return damped_force(delta, delta_dot, kd, approach, int(p[L.DAMPING_LAW]), p[L.VISCOUS_C], p[L.BETA],
+                        p[L.EXPONENT], p[L.RESTITUTION], p[L.V_REFERENCE], p[L.CLIP] > 0.5)

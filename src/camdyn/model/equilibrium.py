@@ -149,7 +149,8 @@ def static_equilibrium(system: System, theta0: float | None = None) -> Equilibri
         contact = False
         thetas = np.linspace(0, 2 * math.pi, 721)
         reach = max(contact_point(alpha, th, ps)[0] for th in thetas)
-        if reach < -1e-6 * system.cam.semi_major and system.motion.kind == "constant":
+        size = system.cam.semi_major if system.profile is None else system.profile.base_radius
+        if reach < -1e-6 * size and system.motion.kind == "constant":
             raise GeometryError(
                 f"the cam cannot reach the follower: at its rest angle {math.degrees(alpha):.3g} deg the "
                 f"closest approach over a revolution leaves a gap of {-reach*1e6:.3g} um")

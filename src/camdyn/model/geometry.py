@@ -8,7 +8,9 @@ centroid) turns counter-clockwise by ``Theta``.
 
 With the support function ``s(n) = sqrt(a^2 (n.e1)^2 + b^2 (n.e2)^2)`` the contact
 point, penetration and moment arm follow without root finding, unlike the thesis's
-slope matching (eqs 4.11-4.12).
+slope matching (eqs 4.11-4.12). A cam given by a profile table (slot ``CAM_SHAPE`` of
+:mod:`camdyn.model.layout`) takes the same quantities from its tabulated support function
+(:mod:`camdyn.model.rocking_profile`).
 """
 
 from __future__ import annotations
@@ -20,9 +22,17 @@ import numpy as np
 
 from camdyn.errors import GeometryError
 from camdyn.model import layout as L
+from camdyn.model.rocking_profile import (
+    contact_point_profile,
+    contact_point_rate_profile,
+    contact_rates_profile,
+    lift_extent,
+    reference_angle,
+)
 
 __all__ = ["cam_angle", "cam_acceleration", "contact_kinematics", "contact_point", "zero_state", "contact_point_rate",
-           "contact_rates_trig", "penetrations", "rigid_angles"]
+           "contact_rates_trig", "penetrations", "rigid_angles", "contact_point_from", "contact_kinematics_from",
+           "contact_rates_from"]
 
 
 @numba.njit(cache=True)
@@ -30,13 +40,51 @@ def cam_angle(t, p):
     """Cam angle ``Theta`` [rad] and speed ``Theta_dot`` [rad/s] at time ``t`` [s].
 
     Constant motion ``Theta0 + Omega t``; oscillating motion
-    ``Theta0 + 0.5 Theta_p sin(omega_c t)`` (thesis 2.7.2).
+    ``Theta0 + 0.5 Theta_p sin(omega_c t)`` (thesis 2.7.2); a ramp from ``Omega0`` to
+    ``Omega`` over ``T``: ``Theta0 + Omega0 t + 0.5 (Omega - Omega0) t^2 / T`` until ``T``,
+    then ``Theta0 + 0.5 (Omega0 + Omega) T + Omega (t - T)`` (uniform acceleration).
     """
     if p[L.MOTION_KIND] == 0.0:
         return p[L.THETA0] + p[L.OMEGA] * t, p[L.OMEGA]
+    if p[L.MOTION_KIND] == 2.0:
+        return _ramp_angle(t, p)
+    if p[L.MOTION_KIND] == 3.0:
+        angle, speed, acceleration = _table_angle(t, p)
+        return angle, speed
     half = 0.5 * p[L.SWING]
     w = p[L.OMEGA_C]
     return p[L.THETA0] + half * math.sin(w * t), half * w * math.cos(w * t)
+
+
+@numba.njit(cache=True)
+def _ramp_angle(t, p):
+    """Cam angle [rad] and speed [rad/s] of the ramp of :func:`cam_angle`."""
+    start = p[L.START_OMEGA]
+    end = p[L.OMEGA]
+    duration = p[L.RAMP_TIME]
+    if t < duration:
+        return p[L.THETA0] + start * t + 0.5 * (end - start) * t * t / duration, start + (end - start) * t / duration
+    return p[L.THETA0] + 0.5 * (start + end) * duration + end * (t - duration), end
+
+
+@numba.njit(cache=True)
+def _table_angle(t, p):
+    """Cam angle [rad], speed [rad/s] and acceleration [rad/s^2] of a tabulated motion:
+    ``Theta(t) = g(t) + W t`` with ``W`` the mean speed and ``g`` a periodic cubic spline
+    of period ``T`` on uniform knots; the coefficients of its power form in each interval,
+    ``g = a0 + a1 s + a2 s^2 + a3 s^3`` with ``s`` the time from the interval's start,
+    follow one another from slot ``p[TABLE_START]`` of ``p``."""
+    period = p[L.TABLE_PERIOD]
+    intervals = int(p[L.TABLE_INTERVALS])
+    step = period / intervals
+    tau = t - period * math.floor(t / period)
+    i = min(int(tau / step), intervals - 1)
+    s = tau - i * step
+    c = int(p[L.TABLE_START]) + 4 * i
+    a0, a1, a2, a3 = p[c], p[c + 1], p[c + 2], p[c + 3]
+    drift = p[L.TABLE_DRIFT]
+    return (a0 + s * (a1 + s * (a2 + s * a3)) + drift * t, a1 + s * (2.0 * a2 + 3.0 * a3 * s) + drift,
+            2.0 * a2 + 6.0 * a3 * s)
 
 
 @numba.njit(cache=True)
@@ -44,6 +92,10 @@ def cam_acceleration(t, p):
     """Cam angular acceleration ``Theta_ddot`` [rad/s^2] at time ``t`` [s]."""
     if p[L.MOTION_KIND] == 0.0:
         return 0.0
+    if p[L.MOTION_KIND] == 2.0:
+        return (p[L.OMEGA] - p[L.START_OMEGA]) / p[L.RAMP_TIME] if t < p[L.RAMP_TIME] else 0.0
+    if p[L.MOTION_KIND] == 3.0:
+        return _table_angle(t, p)[2]
     w = p[L.OMEGA_C]
     return -0.5 * p[L.SWING] * w * w * math.sin(w * t)
 
@@ -70,11 +122,21 @@ def contact_point(alpha, theta, p):
 def contact_point_trig(ca, sa, ct, st, p):
     """:func:`contact_point` from ``cos/sin`` of ``alpha`` and ``Theta`` (computed once by
     the right-hand side and shared with the spring and gravity terms)."""
+    if p[L.CAM_SHAPE] != L.ELLIPSE:
+        return contact_point_profile(ca, sa, ct, st, p)
+    return contact_point_from(ca, sa, ct, st, p[L.PIVOT_X], p[L.PIVOT_Y], p)
+
+
+@numba.njit(cache=True, inline="always")
+def contact_point_from(ca, sa, ct, st, ex, ey, p):
+    """:func:`contact_point_trig` with the cam pivot E at ``(ex, ey)`` [m] from the
+    follower pivot instead of ``p``'s ``(PE_x, PE_y)`` (a follower whose pivot moves,
+    :mod:`camdyn.model.flexible_pivot`; an ellipse only)."""
     a = p[L.SEMI_A]
     b = p[L.SEMI_B]
     e = p[L.RUNOUT]
-    gx = p[L.PIVOT_X] - e * ct          # centroid Gc = E - e e1
-    gy = p[L.PIVOT_Y] - e * st
+    gx = ex - e * ct          # centroid Gc = E - e e1
+    gy = ey - e * st
     n1 = sa * ct + ca * st              # n . e1
     n2 = -sa * st + ca * ct             # n . e2
     s = math.sqrt(a * a * n1 * n1 + b * b * n2 * n2)
@@ -128,9 +190,20 @@ def contact_kinematics(alpha, alpha_dot, theta, theta_dot, p):
 @numba.njit(cache=True, inline="always")
 def contact_kinematics_trig(ca, sa, ct, st, alpha_dot, theta_dot, p):
     """:func:`contact_kinematics` from ``cos/sin`` of ``alpha`` and ``Theta``."""
-    delta, chi, rho_c, xc, yc = contact_point_trig(ca, sa, ct, st, p)
-    vx = -theta_dot * (yc - p[L.PIVOT_Y])   # v_cam = Theta_dot z x (Xc - E)
-    vy = theta_dot * (xc - p[L.PIVOT_X])
+    return contact_kinematics_from(ca, sa, ct, st, alpha_dot, theta_dot, p[L.PIVOT_X], p[L.PIVOT_Y], p)
+
+
+@numba.njit(cache=True, inline="always")
+def contact_kinematics_from(ca, sa, ct, st, alpha_dot, theta_dot, ex, ey, p):
+    """:func:`contact_kinematics_trig` with the cam pivot E at ``(ex, ey)`` [m] from the
+    follower pivot (:func:`contact_point_from`; a profile table's cam turns about ``p``'s
+    pivot); the rates are those of a pivot at rest."""
+    if p[L.CAM_SHAPE] != L.ELLIPSE:
+        delta, chi, rho_c, xc, yc = contact_point_profile(ca, sa, ct, st, p)
+    else:
+        delta, chi, rho_c, xc, yc = contact_point_from(ca, sa, ct, st, ex, ey, p)
+    vx = -theta_dot * (yc - ey)   # v_cam = Theta_dot z x (Xc - E)
+    vy = theta_dot * (xc - ex)
     n_v = sa * vx + ca * vy
     u_v = ca * vx - sa * vy
     delta_dot = -alpha_dot * chi - n_v
@@ -150,6 +223,8 @@ def contact_point_rate(alpha, alpha_dot, theta, theta_dot, p):
     sa = math.sin(alpha)
     ct = math.cos(theta)
     st = math.sin(theta)
+    if p[L.CAM_SHAPE] != L.ELLIPSE:
+        return contact_point_rate_profile(ca, sa, ct, st, alpha_dot, theta_dot, p)
     n1 = sa * ct + ca * st
     n2 = -sa * st + ca * ct
     a = p[L.SEMI_A]
@@ -178,7 +253,18 @@ def contact_rates_trig(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_d
         ``(delta [m], vr [m/s], delta_dot [m/s], vr_dot [m/s^2], delta_ddot [m/s^2])``;
         the rates are NaN when ``alpha_ddot`` is NaN (unknown).
     """
-    delta, chi, rho_c, xc, yc = contact_point_trig(ca, sa, ct, st, p)
+    if p[L.CAM_SHAPE] != L.ELLIPSE:
+        return contact_rates_profile(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_ddot, p)
+    return contact_rates_from(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_ddot,
+                              p[L.PIVOT_X], p[L.PIVOT_Y], p)
+
+
+@numba.njit(cache=True, inline="always")
+def contact_rates_from(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_ddot, ex, ey, p):
+    """:func:`contact_rates_trig` with the cam pivot E at ``(ex, ey)`` [m] from the
+    follower pivot (:func:`contact_point_from`; an ellipse only); the rates are those of
+    a pivot at rest."""
+    delta, chi, rho_c, xc, yc = contact_point_from(ca, sa, ct, st, ex, ey, p)
     a = p[L.SEMI_A]
     b = p[L.SEMI_B]
     e = p[L.RUNOUT]
@@ -186,8 +272,8 @@ def contact_rates_trig(ca, sa, ct, st, alpha_dot, alpha_ddot, theta_dot, theta_d
     n2 = -sa * st + ca * ct
     s = math.sqrt(a * a * n1 * n1 + b * b * n2 * n2)
     w = e * n1 + s
-    n_e = sa * p[L.PIVOT_X] + ca * p[L.PIVOT_Y]     # n . E
-    u_e = ca * p[L.PIVOT_X] - sa * p[L.PIVOT_Y]     # u . E
+    n_e = sa * ex + ca * ey     # n . E
+    u_e = ca * ex - sa * ey     # u . E
     phi_dot = alpha_dot + theta_dot
     vr = theta_dot * w - alpha_dot * p[L.OFFSET]
     delta_dot = -alpha_dot * chi - theta_dot * (chi - u_e)
@@ -232,6 +318,13 @@ def zero_state(system) -> tuple[float, float]:
     ``h + rc`` with no runout in the touching condition), ``"auto"`` the first for a
     circle and the second for an ellipse.
 
+    A cam given by a profile (``system.profile``): the follower touches the cam where
+    its support function is ``h(theta*)``, ``PEx sin a0 + PEy cos a0 = h + h(theta*)``, and
+    ``Theta0 = theta* + pi/2 - a0`` (:mod:`camdyn.model.rocking_profile`, eq R1), with
+    ``theta*`` the maximum lift (``"maximum-lift"``, and ``"auto"``) or ``-pi/2``
+    (``"runout-parallel"``: the eccentric circle's runout along the follower); both give
+    the circle's 0-states for :func:`camdyn.model.profiles.eccentric_circle`.
+
     Raises
     ------
     GeometryError
@@ -239,6 +332,8 @@ def zero_state(system) -> tuple[float, float]:
     """
     c, f = system.cam, system.follower
     h = f.surface_offset
+    if system.profile is not None:
+        return _profile_zero_state(system)
     lift = system.motion.zero_state == "maximum-lift" or (system.motion.zero_state == "auto" and c.is_circle)
     rhs = h + c.semi_major + c.runout if lift else h + c.semi_minor
     r = math.hypot(c.pivot_x, c.pivot_y)
@@ -250,3 +345,26 @@ def zero_state(system) -> tuple[float, float]:
     a0 = math.asin(rhs / r) - phase             # the root with the bar nearest horizontal
     theta0 = math.pi / 2 - a0 if lift else -a0
     return a0, theta0
+
+
+def _profile_zero_state(system) -> tuple[float, float]:
+    """:func:`zero_state` of a cam given by a profile."""
+    c, profile = system.cam, system.profile
+    theta_star = reference_angle(profile, system.motion.zero_state != "runout-parallel")
+    rhs = system.follower.surface_offset + profile.base_radius + float(profile.lift(theta_star)[0][0])
+    r = math.hypot(c.pivot_x, c.pivot_y)
+    if rhs > r:
+        raise GeometryError(
+            f"the cam cannot reach the follower: the cam pivot is {r*1e3:.3g} mm from the follower pivot, "
+            f"but contact needs {rhs*1e3:.3g} mm (surface offset + the profile's base radius and lift)")
+    phase = math.atan2(c.pivot_y, c.pivot_x)
+    a0 = math.asin(rhs / r) - phase
+    return a0, (theta_star + math.pi / 2) - a0
+
+
+def profile_reach(profile) -> tuple[float, float, float]:
+    """``(lift range [m], lowest h' [m/rad], highest h' [m/rad])`` of a cam profile: how
+    far its support function and so the moment arm (``chi = u.E - h'``, eq R3 of
+    :mod:`camdyn.model.rocking_profile`) move over a revolution."""
+    h_min, h_max, slope_min, slope_max = lift_extent(profile)
+    return h_max - h_min, slope_min, slope_max

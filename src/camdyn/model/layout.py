@@ -58,12 +58,25 @@ FRICTION_LAW = 27   # code of FRICTION_LAWS
 MU = 28             # mu_m [-]
 SMOOTHING = 29      # sigma of tanh friction [s/m]
 # motion
-MOTION_KIND = 30    # 0 constant, 1 oscillating
+MOTION_KIND = 30    # 0 constant, 1 oscillating, 2 ramp, 3 tabulated (packed by simulation.mechanisms)
 THETA0 = 31         # Theta0 [rad]
 OMEGA = 32          # signed cam angular speed [rad/s]
 SWING = 33          # Theta_p, peak-to-peak [rad]
 OMEGA_C = 34        # oscillation angular frequency [rad/s]
-SIZE = 35
+START_OMEGA = 35    # signed cam angular speed a ramp starts from [rad/s]
+RAMP_TIME = 36      # duration of a ramp [s]
+TABLE_START = 37    # slot of the first spline coefficient of a tabulated motion (kind 3) [-]
+TABLE_INTERVALS = 38  # number of spline intervals over the table's period [-]
+TABLE_PERIOD = 39   # period of the tabulated motion [s]
+TABLE_DRIFT = 40    # mean cam speed of the tabulated motion, (Theta(T) - Theta(0)) / T [rad/s]
+# cam shape
+CAM_SHAPE = 41      # 0 the ellipse of SEMI_A, SEMI_B, RUNOUT; 1 a profile table (camdyn.model.rocking_profile)
+PROFILE_START = 42  # slot of the profile table (camdyn.model.profiles) of a cam of shape 1 [-]
+BASE_RADIUS = 43    # base circle radius r_base of a cam of shape 1 [m]
+SIZE = 44
+#: Values of the CAM_SHAPE slot.
+ELLIPSE = 0.0
+PROFILE_TABLE = 1.0
 
 #: Mode slots passed with the state to the right-hand side (hybrid-system mode).
 MODE_CONTACT = 0     # 1 in contact, 0 free flight
@@ -91,8 +104,11 @@ _READERS = tuple((slot, parameter_index(System)[key].getter) for slot, key in CO
 
 def effective_modulus(system: System) -> float:
     """Contact modulus ``E*`` [Pa]: ``1/E* = (1-nu_c^2)/Y_c + (1-nu_b^2)/Y_b`` (eq 2.13, 3.12)."""
+    # imported here: contact.py reads this module's slots
+    from camdyn.model.contact import effective_modulus as modulus
+
     c, f = system.cam, system.follower
-    return 1.0 / ((1 - c.poisson_ratio ** 2) / c.youngs_modulus + (1 - f.poisson_ratio ** 2) / f.youngs_modulus)
+    return modulus(c.youngs_modulus, c.poisson_ratio, f.youngs_modulus, f.poisson_ratio)
 
 
 def pack(system: System, viscous_c: float = 0.0, initial_angle: float | None = None) -> np.ndarray:
@@ -106,6 +122,9 @@ def pack(system: System, viscous_c: float = 0.0, initial_angle: float | None = N
         by :func:`camdyn.model.equilibrium.viscous_coefficient`).
     initial_angle : float, optional
         Cam angle ``Theta0`` [rad]; defaults to ``system.motion.initial_angle``.
+
+    A cam given by a profile (``system.profile``) is packed as shape
+    :data:`PROFILE_TABLE`, its table appended after the :data:`SIZE` slots.
     """
     s = system
     p = np.zeros(SIZE)
@@ -122,4 +141,11 @@ def pack(system: System, viscous_c: float = 0.0, initial_angle: float | None = N
     p[THETA0] = 0.0 if theta0 is None else theta0
     p[OMEGA] = s.motion.angular_speed
     p[OMEGA_C] = 2.0 * math.pi * s.motion.frequency * s.motion.direction
+    p[START_OMEGA] = 2.0 * math.pi * s.motion.start_speed * s.motion.direction
+    p[RAMP_TIME] = s.motion.ramp_time
+    if s.profile is not None:
+        p[CAM_SHAPE] = PROFILE_TABLE
+        p[PROFILE_START] = SIZE
+        p[BASE_RADIUS] = s.profile.base_radius
+        p = np.concatenate([p, s.profile.table])
     return p

@@ -12,6 +12,12 @@ unit it is stored in (SI). The keys, units and meanings are declared once, on th
 of the dataclasses of :mod:`camdyn.params.system` (see :mod:`camdyn.params.schema`);
 :data:`SCHEMA`, :func:`build_system` and :func:`system_to_toml` are derived from them.
 Presets are such files shipped in ``camdyn/params/presets``.
+
+A ``[profile]`` table (:data:`PROFILE_KEYS`, a translating follower's profile keys)
+replaces the ellipse by a cam profile: :func:`read_system` returns its keys in SI units
+beside the system, and :func:`camdyn.io.system_config.load_system` builds the profile
+(this layer knows no cam model); :func:`load_system`, :func:`system_from_toml` and
+:func:`system_to_toml` handle the ellipse only and refuse a profile.
 """
 
 from __future__ import annotations
@@ -25,6 +31,9 @@ from pathlib import Path
 
 from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyError
 from camdyn.params.laws import lookup
+from camdyn.params.profile_table import profile_spec
+from camdyn.params.profiles import SCHEMA as PROFILE_SCHEMA
+from camdyn.params.profiles import TranslatingSpec, list_translating_presets
 from camdyn.params.schema import Parameter, groups, parameter_index, parameters
 from camdyn.params.system import System
 from camdyn.params.units import parse_quantity, parse_speed
@@ -32,7 +41,7 @@ from camdyn.params.units import parse_quantity, parse_speed
 __all__ = [
     "SCHEMA", "PARAMETERS", "RADIUS_KEY", "list_presets", "preset_text", "load_system", "build_system", "flatten",
     "beta_unit", "convert_value", "unknown_key_error", "read_table", "system_from_toml", "system_to_toml",
-    "parse_assignments",
+    "parse_assignments", "PROFILE_KEYS", "read_system",
 ]
 
 #: Every parameter of a :class:`~camdyn.params.system.System`, in the dataclasses' order.
@@ -47,6 +56,11 @@ SCHEMA: dict[str, tuple[str, str]] = {
     **{p.key: (p.unit, p.meaning) for p in PARAMETERS},
 }
 _META_KEYS = {"preset.name", "preset.citation", "preset.description"}
+#: Keys of the ``[profile]`` table: a cam profile made for a flat face in place of the
+#: ellipse (:attr:`camdyn.params.system.System.profile`), as a translating follower's.
+PROFILE_KEYS = tuple(key for key in PROFILE_SCHEMA if key.startswith("profile.")) + ("profile.face",)
+_PROFILE_REFUSED = ("the [profile] table (a cam profile in place of the ellipse) is read by camdyn.load_system "
+                    "and 'camdyn simulate', which build the profile; this reader builds the ellipse only")
 
 
 def beta_unit(law: str, exponent: float) -> str:
@@ -66,6 +80,22 @@ def flatten(table: dict, prefix: str = "") -> dict:
         else:
             out[dotted] = value
     return out
+
+
+def read_toml_file(source: str | Path) -> dict:
+    """The flattened tables (:func:`flatten`) of the TOML file ``source``, or a
+    :class:`PresetError` that says why it cannot be read."""
+    path = Path(str(source))
+    try:
+        return flatten(tomllib.loads(path.read_text(encoding="utf-8")))
+    except FileNotFoundError:
+        raise PresetError(f"configuration file {str(source)!r} does not exist") from None
+    except OSError as exc:
+        raise PresetError(f"{source}: cannot be read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise PresetError(f"{source}: not UTF-8 text; a configuration file is TOML, saved as UTF-8") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise PresetError(f"{source}: not valid TOML ({exc})") from None
 
 
 def unknown_key_error(key: str) -> UnknownKeyError:
@@ -165,9 +195,11 @@ def _arguments(table: str, values: dict) -> dict:
 
 
 def list_presets() -> list[str]:
-    """Names of the bundled presets."""
+    """Names of the bundled presets of the rocking follower (those of the translating
+    follower: :func:`camdyn.params.profiles.list_translating_presets`)."""
     folder = resources.files("camdyn.params.presets")
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+    translating = set(list_translating_presets())
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml") and p.name[:-5] not in translating)
 
 
 def preset_text(name: str) -> str:
@@ -182,6 +214,9 @@ def preset_text(name: str) -> str:
 def read_table(source: str | Path) -> tuple[dict, str, str]:
     """Read a preset name or TOML file path; return (dotted values, name, citation)."""
     path = Path(str(source))
+    if str(source) in list_translating_presets():
+        raise PresetError(f"{str(source)!r} is a preset of the translating follower, not of the rocking one; "
+                          "run it with 'camdyn simulate' or load it with camdyn.io.lift_table.load_translating")
     if str(source) in list_presets():
         text, name = preset_text(str(source)), str(source)
     elif path.suffix == ".toml" or path.exists():
@@ -208,11 +243,14 @@ def read_table(source: str | Path) -> tuple[dict, str, str]:
 
 
 def system_from_toml(text: str) -> System:
-    """Build a system from TOML text (as written by :func:`system_to_toml`)."""
+    """Build a system from TOML text (as written by :func:`system_to_toml`); a
+    ``[profile]`` table is refused (:func:`read_system` reads it)."""
     try:
         flat = flatten(tomllib.loads(text))
     except tomllib.TOMLDecodeError as exc:
         raise PresetError(f"system TOML is not valid ({exc})") from None
+    if any(key.startswith("profile.") for key in flat):
+        raise ParameterError(_PROFILE_REFUSED)
     return build_system(flat, name=str(flat.get("preset.name", "custom")),
                         citation=str(flat.get("preset.citation", "")))
 
@@ -231,6 +269,9 @@ def parse_assignments(assignments: list[str] | None) -> dict:
 def load_system(source: str | Path, overrides: dict | None = None) -> System:
     """Load a preset or TOML file, apply dotted-key overrides, and validate.
 
+    A file with a ``[profile]`` table is refused here: :func:`camdyn.load_system`
+    (:func:`camdyn.io.system_config.load_system`) builds its profile.
+
     Parameters
     ----------
     source : str or Path
@@ -238,10 +279,36 @@ def load_system(source: str | Path, overrides: dict | None = None) -> System:
     overrides : dict, optional
         Dotted key -> value with unit as text, e.g. ``{"cam.runout": "3.5 mm"}``.
     """
+    system, profile = read_system(source, overrides)
+    if profile is not None:
+        raise ParameterError(f"{source}: {_PROFILE_REFUSED}")
+    return system
+
+
+def read_system(source: str | Path, overrides: dict | None = None) -> tuple[System, TranslatingSpec | None]:
+    """Read a preset or TOML file with dotted-key overrides: the system with its ellipse,
+    and the ``[profile]`` table's keys in SI units, when it has one.
+
+    Parameters
+    ----------
+    source : str or Path
+        Preset name (see :func:`list_presets`) or path to a TOML file.
+    overrides : dict, optional
+        Dotted key -> value with unit as text, e.g. ``{"profile.base_radius": "16 mm"}``.
+
+    Returns
+    -------
+    system : System
+        Built from every key but the profile's (``profile`` is None).
+    profile : TranslatingSpec or None
+        The profile's keys, checked key by key as a translating follower's
+        (:func:`camdyn.params.profile_table.profile_spec`); a relative ``profile.file`` is
+        taken from the TOML file's folder. None without a ``[profile]`` table.
+    """
     flat, name, citation = read_table(source)
     overrides = dict(overrides or {})
     for key in overrides:
-        if key not in SCHEMA:
+        if key not in SCHEMA and not key.startswith("profile."):
             raise unknown_key_error(key)
     if ("cam.semi_major" in overrides or "cam.semi_minor" in overrides) and RADIUS_KEY in flat:
         radius = flat.pop(RADIUS_KEY)  # a circle preset turned elliptic: start from a = b = rc
@@ -251,16 +318,53 @@ def load_system(source: str | Path, overrides: dict | None = None) -> System:
         flat.pop("cam.semi_major", None)
         flat.pop("cam.semi_minor", None)
     flat.update(overrides)
-    return build_system(flat, name=name, citation=citation)
+    table = {key: value for key, value in flat.items() if key.startswith("profile.")}
+    system = build_system({key: value for key, value in flat.items() if key not in table}, name=name,
+                          citation=citation)
+    if not table:
+        return system, None
+    return system, _profile(table, name, source)
 
 
-def system_to_toml(system: System) -> str:
+def _profile(table: dict, name: str, source: str | Path) -> TranslatingSpec:
+    """The ``[profile]`` keys of a rocking flat-faced follower's file, in SI units."""
+    for key in table:
+        if key not in PROFILE_KEYS:
+            close = difflib.get_close_matches(key, list(PROFILE_KEYS), n=3)
+            hint = f"; did you mean {', '.join(close)}?" if close else f"; known keys: {', '.join(PROFILE_KEYS)}"
+            raise UnknownKeyError(f"unknown key {key!r} in the [profile] table of the rocking flat-faced "
+                                  f"follower{hint}")
+    face = table.get("profile.face", "flat")
+    if face != "flat":
+        raise ParameterError(f"profile.face {face!r}: the rocking follower of this configuration has a flat face "
+                             "and rides a profile made for a flat face only (profile.face = \"flat\"); a roller or "
+                             "knife edge on a rocking arm is configured with [follower] kind = \"rocking\"")
+    path = Path(str(source))
+    folder = path.resolve().parent if str(source) not in list_presets() and path.is_file() else None
+    return profile_spec(table, "flat", 0.0, name, folder)
+
+
+def system_to_toml(system: System, ignore_profile: bool = False) -> str:
     """Write a system as TOML text with units, readable by :func:`load_system`.
 
     Every parameter of :data:`PARAMETERS` is written in its group's table, in the unit
     its field declares; a cam with equal semi-axes is written with ``radius``, an unset
     optional parameter is left out.
+
+    Parameters
+    ----------
+    system : System
+        The system to write.
+    ignore_profile : bool
+        Write the ellipse's keys of a system whose cam is a profile (as a result's
+        parameters do, beside its ``cam_profile`` attribute). Without it such a system is
+        refused: a profile keeps its packed table, not the ``[profile]`` keys it was read
+        from, so it cannot be written back.
     """
+    if system.profile is not None and not ignore_profile:
+        raise ParameterError(f"system {system.name!r}: its cam is a profile, which cannot be written back as TOML "
+                             "(a profile keeps its packed table, not the [profile] keys it was read from); write "
+                             "the [profile] table by hand, or keep the TOML file it was read from")
     lines = ["[preset]", f"name = {_text(system.name)}", f"citation = {_text(system.citation)}"]
     table = ""
     for param in PARAMETERS:

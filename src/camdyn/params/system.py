@@ -30,7 +30,7 @@ __all__ = [
 ]
 
 FRICTION_LAWS = {"none": 0, "coulomb": 1, "tanh": 2}
-MOTION_KINDS = {"constant": 0, "oscillating": 1}
+MOTION_KINDS = {"constant": 0, "oscillating": 1, "ramp": 2}
 #: Conventions for the 0-state that fixes ``Theta0`` when no initial angle is given
 #: (docs/model.md §2): the thesis's chapter 3 (eqs 3.3-3.4) and chapter 4 (eqs 4.3-4.4).
 ZERO_STATES = ("auto", "maximum-lift", "runout-parallel")
@@ -323,9 +323,13 @@ class Motion:
     ----------
     kind : str
         ``"constant"``: ``Theta = Theta0 + 2 pi f t``; ``"oscillating"``:
-        ``Theta = Theta0 + 0.5 Theta_p sin(2 pi f_c t)`` (thesis 2.7.2).
+        ``Theta = Theta0 + 0.5 Theta_p sin(2 pi f_c t)`` (thesis 2.7.2); ``"ramp"``:
+        constant angular acceleration from ``start_speed`` to ``speed`` over
+        ``ramp_time``, then constant speed (a run-up, or a slow-down when
+        ``start_speed > speed``).
     speed : float
-        Cam speed ``f`` [Hz] (revolutions per second), constant motion.
+        Cam speed ``f`` [Hz] (revolutions per second), constant motion; the speed a ramp
+        ends at.
     amplitude : float
         Peak-to-peak swing ``Theta_p`` [rad], oscillating motion.
     frequency : float
@@ -341,9 +345,13 @@ class Motion:
         a circle, runout parallel for an ellipse.
     initial_angle : float or None
         ``Theta0`` [rad]; None uses the 0-state (docs/model.md §2).
+    start_speed : float
+        Cam speed [Hz] a ramp starts from.
+    ramp_time : float
+        Duration [s] of a ramp's constant acceleration.
     """
 
-    kind: str = parameter("str", "'constant' or 'oscillating'", "constant")
+    kind: str = parameter("str", "'constant', 'oscillating' or 'ramp'", "constant")
     speed: float = parameter("speed", "cam speed (Hz = rev/s, rpm or rad/s)", 10.0, written="Hz")
     amplitude: float = parameter("rad", "peak-to-peak swing Theta_p of oscillating motion", 0.0)
     frequency: float = parameter("Hz", "frequency of oscillating motion", 0.0)
@@ -351,6 +359,9 @@ class Motion:
     zero_state: str = parameter("str", "0-state fixing Theta0: 'maximum-lift' (thesis ch 3), 'runout-parallel' "
                                        "(ch 4) or 'auto'", "auto")
     initial_angle: float | None = parameter("rad", "initial cam angle Theta0 (default: the 0-state)", None)
+    start_speed: float = parameter("speed", "cam speed a ramp starts from (Hz = rev/s, rpm or rad/s)", 0.0,
+                                   written="Hz")
+    ramp_time: float = parameter("s", "duration of a ramp's constant acceleration", 0.0)
 
     def __post_init__(self):
         _check_finite("motion", self)
@@ -367,6 +378,10 @@ class Motion:
             raise ParameterError(f"motion.direction must be +1 or -1, got {self.direction}")
         if self.kind == "oscillating" and (self.amplitude <= 0 or self.frequency <= 0):
             raise ParameterError("oscillating cam motion needs motion.amplitude > 0 and motion.frequency > 0")
+        _nonnegative("motion", "start_speed", self.start_speed)
+        _nonnegative("motion", "ramp_time", self.ramp_time)
+        if self.kind == "ramp" and self.ramp_time <= 0:
+            raise ParameterError("a ramp of the cam speed needs motion.ramp_time > 0 [s]")
 
     @property
     def angular_speed(self) -> float:
@@ -376,8 +391,24 @@ class Motion:
     @property
     def period(self) -> float:
         """Period of the cam input [s]: one revolution, or one oscillation."""
-        f = self.speed if self.kind == "constant" else self.frequency
+        f = self.frequency if self.kind == "oscillating" else self.speed   # a ramp: the final speed
         return math.inf if f == 0 else 1.0 / f
+
+
+def _check_profile(profile) -> None:
+    """Refuse a cam profile the rocking follower cannot ride: anything but a profile of
+    :mod:`camdyn.model.profiles` (read by its attributes: this layer imports no model), or
+    one made for a roller or knife-edge follower (the rocking follower has a flat face)."""
+    if profile is None:
+        return
+    follower = getattr(profile, "follower", None)
+    table = getattr(profile, "table", None)
+    if not isinstance(follower, str) or table is None or not hasattr(profile, "base_radius"):
+        raise ParameterError(f"profile must be a cam profile of camdyn.model.profiles (e.g. eccentric_circle(...)), "
+                             f"got {type(profile).__name__}")
+    if follower != "flat":
+        raise ParameterError(f"the rocking follower has a flat face: its cam profile must be made for a flat-faced "
+                             f"follower (follower='flat'), not for a {follower} follower")
 
 
 @dataclass(frozen=True)
@@ -392,6 +423,12 @@ class System:
         Source of the parameter values.
     gravity : float
         Gravitational acceleration ``g`` [m/s^2].
+    profile : camdyn.model.profiles.Profile or None
+        The cam's shape as a profile table made for a flat-faced follower (e.g.
+        ``eccentric_circle``, ``rise_return_profile``, ``tabulated_profile``), in place of
+        the ellipse of ``cam.semi_major``, ``cam.semi_minor`` and ``cam.runout``, which it
+        overrides; the cam's pivot and material still come from ``cam``. None (the
+        default): the ellipse. See docs/profiles.md, "The rocking follower on a profile".
     """
 
     cam: Cam = group(Cam, required=True)
@@ -403,11 +440,13 @@ class System:
     gravity: float = parameter("m/s**2", "gravitational acceleration g", 9.81, table="environment")
     name: str = "custom"
     citation: str = ""
+    profile: object = None
 
     def __post_init__(self):
         if not math.isfinite(self.gravity):
             raise ParameterError("environment.gravity must be finite")
         _nonnegative("environment", "gravity", self.gravity)
+        _check_profile(self.profile)
         # The follower's contact line must pass below the cam pivot region: the cam
         # pivot has to be on the cam's side of the follower (docs/model.md §1: cam above).
         h = self.follower.surface_offset

@@ -81,6 +81,22 @@ def _sweep_line(ds: xr.Dataset, dims: list, path) -> Path:
     return save_figure(fig, path)
 
 
+def _cell_edges(values: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Edges of the cells centred on the swept ``values`` (in order), and whether the axis is
+    logarithmic: for positive values spanning a factor of 10 or more the cells meet at the
+    geometric means (a linear axis would stretch the smallest cell below zero)."""
+    v = np.asarray(values, dtype=float)
+    log = v.size > 1 and bool(np.all(v > 0)) and v.max() / v.min() >= 10.0
+    w = np.log(v) if log else v
+    if w.size == 1:
+        inner, first, last = np.array([]), w[0] - 0.5, w[0] + 0.5
+    else:
+        inner = 0.5 * (w[1:] + w[:-1])
+        first, last = w[0] - (inner[0] - w[0]), w[-1] + (w[-1] - inner[-1])
+    edges = np.concatenate([[first], inner, [last]])
+    return (np.exp(edges) if log else edges), log
+
+
 @styled
 def plot_sweep(ds: xr.Dataset, path: str | Path) -> Path:
     """Figure of a sweep result (:func:`camdyn.sweeps.run_sweep`).
@@ -90,8 +106,10 @@ def plot_sweep(ds: xr.Dataset, path: str | Path) -> Path:
     the largest normal force, as far as the metrics hold them. Two or more: maps of the
     regime and of impacts per revolution over the first two swept dimensions (later
     dimensions at their first value). Swept parameters are drawn in the unit the spec
-    gave them in.
+    gave them in. A sweep over two followers is drawn for follower 1.
     """
+    if "follower" in ds.dims:
+        ds = ds.isel(follower=0)
     dims = list(ds["status"].dims)
     if len(dims) == 1:
         return _sweep_line(ds, dims, path)
@@ -101,11 +119,12 @@ def plot_sweep(ds: xr.Dataset, path: str | Path) -> Path:
     y, _ = display_values(second)
     names = [n for n in ("regime", "impacts_per_revolution") if n in ds] or ["status"]
     fig, axes = plt.subplots(1, len(names), figsize=(5.2 * len(names) + 0.6, 4.6), squeeze=False)
+    (x_edges, x_log), (y_edges, y_log) = _cell_edges(x), _cell_edges(y)
     for ax, name in zip(axes[0], names):
         values = ds[name].isel(sel).transpose(dims[1], dims[0]).values.astype(float)
         if name == "regime":
             codes = sorted(_REGIME_COLOURS)
-            ax.pcolormesh(x, y, values, shading="nearest", vmin=-1.5, vmax=3.5,
+            ax.pcolormesh(x_edges, y_edges, values, shading="flat", vmin=-1.5, vmax=3.5,
                           cmap=ListedColormap([_REGIME_COLOURS[c] for c in codes]))
             present = set(np.unique(values[np.isfinite(values)]).astype(int))
             for c in codes:
@@ -113,14 +132,17 @@ def plot_sweep(ds: xr.Dataset, path: str | Path) -> Path:
                     ax.plot([], [], "s", color=_REGIME_COLOURS[c], label=_REGIME_NAMES[c], markersize=8)
             ax.set_title("regime")
         else:
-            mesh = ax.pcolormesh(x, y, values, shading="nearest", cmap="viridis")
+            mesh = ax.pcolormesh(x_edges, y_edges, values, shading="flat", cmap="viridis")
             fig.colorbar(mesh, ax=ax, label=_metric_label(ds[name]))
             ax.set_title("impacts per cam revolution" if name == "impacts_per_revolution" else name)
         ax.set_xlabel(coordinate_label(first))
         ax.set_ylabel(coordinate_label(second))
         ax.grid(False)
-        tidy_axis(ax.xaxis, 6)
-        tidy_axis(ax.yaxis, 6)
+        for axis, log, scale in ((ax.xaxis, x_log, ax.set_xscale), (ax.yaxis, y_log, ax.set_yscale)):
+            if log:
+                scale("log")
+            else:
+                tidy_axis(axis, 6)
     if "regime" in names:
         legend_below(fig, axes[0, 0], 5)
     return save_figure(fig, path)
@@ -164,7 +186,10 @@ def _kinematic_lines(ax, ds: xr.Dataset, dims: list, x: np.ndarray, y: np.ndarra
 def plot_regime_map(ds: xr.Dataset, path: str | Path) -> Path:
     """Regime map (:func:`camdyn.sweeps.regime_map.regime_map`): simulated regions over
     the two swept parameters (in the units the spec gave), with the inverse-kinematics
-    loss-of-contact curve (solid) and the boundary of sliding-velocity reversal (dashed)."""
+    loss-of-contact curve (solid) and the boundary of sliding-velocity reversal (dashed);
+    over two followers, follower 1's impacts band the periodic regions."""
+    if "follower" in ds.dims:
+        ds = ds.isel(follower=0)
     dims = list(ds["regime"].dims)
     xc, yc = _coordinate(ds, dims[0]), _coordinate(ds, dims[1])
     (fx, _), (fy, _) = display_scale(xc), display_scale(yc)
@@ -180,6 +205,14 @@ def plot_regime_map(ds: xr.Dataset, path: str | Path) -> Path:
         if c in present:
             ax.plot([], [], "s", color=colours[c + 1], label=label, markersize=8)
     _kinematic_lines(ax, ds, dims, x, y, (fx, fy))
+    if "period" in ds and min(codes.shape) > 1:               # the simulation's period-1 / period-k boundary
+        multiple = ((ds["period"].values > 1) & (ds["regime"].values == 2)).astype(float)
+        if 0 < multiple.sum() < multiple.size:
+            ax.contour(x, y, multiple.T, levels=[0.5], colors="#7f7f7f", linestyles=":", linewidths=1.5)
+            ax.plot([], [], ":", color="#7f7f7f", label="Poincare period > 1\n(simulation)")
+    for name in (v for v in ds.data_vars if "curve_kind" in ds[v].attrs and ds[v].dims == (dims[0],)):
+        ax.plot(x, ds[name].values * fy, "o-", color="#e377c2", lw=1.8, ms=4,
+                label=f"{ds[name].attrs['curve_kind']}\n(continuation)")
     agree = {k[len("agreement_"):]: ds.attrs[k] for k in ds.attrs if k.startswith("agreement_")}
     if agree:
         ax.set_title(f"simulation agrees with inverse kinematics at {agree['kept_agree']}/{agree['kept']} "

@@ -254,7 +254,7 @@ def _dataset(system, prep, p, t_out, y_out, acc, imp, law, pulse_duration) -> xr
                "gamma_s_per_m": gamma if restitution is None else math.nan,
                "restitution": restitution if restitution is not None else math.nan,
                "pulse_duration_s": pulse_duration,
-               "parameters_toml": system_to_toml(system), "initial_cam_angle_rad": prep.theta0})
+               "parameters_toml": system_to_toml(system, ignore_profile=True), "initial_cam_angle_rad": prep.theta0})
 
 
 def _hann(u, width):

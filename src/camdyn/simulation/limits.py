@@ -14,7 +14,8 @@ import warnings
 
 import numpy as np
 
-from camdyn.errors import ParameterError
+from camdyn.errors import ParameterError, SimulationError
+from camdyn.integrator import driver
 from camdyn.params.system import System
 
 __all__ = ["LargeResultWarning", "check_number", "check_system", "check_tolerances", "check_sampling",
@@ -132,3 +133,13 @@ def check_memory(needed: int, what: str) -> None:
                              f"are free; shorten the run or lower the sample rate")
     if needed > WARN_BYTES:
         warnings.warn(f"{what} will take about {needed / 1e6:.0f} MB of memory", LargeResultWarning, stacklevel=3)
+
+
+def check_run(counters, what: str) -> None:
+    """Raise for a compiled run that did not end well: ``KeyboardInterrupt`` if it was
+    interrupted, else :class:`SimulationError` ``"<what> <the driver's reason>"``."""
+    status = int(counters[driver.COUNT_STATUS])
+    if status == driver.STATUS_INTERRUPTED:
+        raise KeyboardInterrupt
+    if status != driver.STATUS_OK:
+        raise SimulationError(f"{what} {driver.STATUS_MESSAGES[status]}")

@@ -18,15 +18,16 @@ from camdyn.model.equilibrium import (
     static_equilibrium,
     viscous_coefficient,
 )
-from camdyn.model.geometry import zero_state
+from camdyn.model.geometry import profile_reach, zero_state
 from camdyn.model.outputs import CHANNELS, derived
+from camdyn.model.profiles import check_profile
 from camdyn.params.config import system_to_toml
 from camdyn.params.system import System
 from camdyn.params.units import parse_speed
 from camdyn.simulation import limits
 from camdyn.systems import registry as systems
 
-__all__ = ["simulate", "prepare", "impact_table", "Prepared", "penetration_resolution"]
+__all__ = ["simulate", "prepare", "impact_table", "Prepared", "penetration_resolution", "run_dataset"]
 
 METHODS = {"auto": driver.METHOD_AUTO, "explicit": driver.METHOD_EXPLICIT,
            "dop853": driver.METHOD_DOP853, "rosenbrock": driver.METHOD_ROSENBROCK}
@@ -37,6 +38,8 @@ class Prepared:
 
     def __init__(self, system: System):
         self.system = system
+        if system.profile is not None:
+            check_profile(system.profile)   # convex, lift and slope continuous
         theta0 = system.motion.initial_angle
         if theta0 is None:
             theta0 = zero_state(system)[1]
@@ -57,8 +60,13 @@ def _check_contact_on_follower(system: System, eq: Equilibrium) -> None:
     if not eq.in_contact:
         return
     cam, length = system.cam, system.follower.length
-    reach = cam.runout + (cam.semi_major - cam.semi_minor)
-    near, far = eq.moment_arm - reach, eq.moment_arm + reach
+    if system.profile is not None:   # chi = u.E - h' (eq R3 of camdyn.model.rocking_profile)
+        _, slope_min, slope_max = profile_reach(system.profile)
+        slope = float(system.profile.lift(eq.angle + eq.cam_angle - 0.5 * math.pi)[1][0])   # h' now (eq R1)
+        near, far = eq.moment_arm + slope - slope_max, eq.moment_arm + slope - slope_min
+    else:
+        reach = cam.runout + (cam.semi_major - cam.semi_minor)
+        near, far = eq.moment_arm - reach, eq.moment_arm + reach
     if near <= 0.0 or far >= length:
         raise GeometryError(
             f"the cam touches the follower between {near * 1e3:.3g} and {far * 1e3:.3g} mm from the pivot over a "
@@ -85,7 +93,7 @@ def prepare(system: System) -> Prepared:
 
 
 #: The parameters as TOML text, for the result's attributes (once per distinct system).
-_parameters_toml = functools.lru_cache(maxsize=64)(system_to_toml)
+_parameters_toml = functools.lru_cache(maxsize=64)(functools.partial(system_to_toml, ignore_profile=True))
 
 
 def penetration_resolution(prep: Prepared, rtol: float, atol: float) -> float:
@@ -102,7 +110,8 @@ def penetration_resolution(prep: Prepared, rtol: float, atol: float) -> float:
     if not eq.in_contact or eq.penetration <= 0.0:
         return 0.0
     chi = abs(eq.moment_arm)
-    swing = abs(eq.angle) + prep.system.cam.runout / chi
+    runout = prep.system.cam.runout if prep.system.profile is None else 0.5 * profile_reach(prep.system.profile)[0]
+    swing = abs(eq.angle) + runout / chi
     return (rtol * swing + atol) * chi / eq.penetration
 
 
@@ -279,6 +288,16 @@ def check_variables(variables) -> frozenset:
     return frozenset(names)
 
 
+def run_dataset(system: System, prep: Prepared, t, y, modes, events, counters, elapsed: float, rtol: float,
+                atol: float, method: str, variables=None) -> xr.Dataset:
+    """The Dataset :func:`simulate` returns, for a cam-follower run made elsewhere (one that
+    packs its own parameter vector ``prep.p``): output times ``t`` [s], states ``y``,
+    ``modes``, ``events`` and ``counters`` of :func:`camdyn.integrator.driver.integrate`,
+    its wall time ``elapsed`` [s], and the tolerances and method it ran with."""
+    return _dataset(system, prep, t, y, modes, events, counters, elapsed, rtol, atol, method,
+                    check_variables(variables))
+
+
 def _dataset(system, prep, t, y, modes, events, counters, elapsed, rtol, atol, method, wanted) -> xr.Dataset:
     data = {}
     for j, (name, unit, long_name) in enumerate(STATE_VARIABLES):
@@ -329,6 +348,9 @@ def _attributes(system, prep, counters, elapsed, rtol, atol, method) -> dict:
         "initial_cam_angle_rad": prep.theta0,
         "viscous_damping_N_s_per_m": prep.viscous_c,
     }
+    if system.profile is not None:   # the parameters' TOML describes the cam by its ellipse: say it is replaced
+        attrs["cam_profile"] = (f"profile table of {int(system.profile.table[0])} segments, base radius "
+                                f"{system.profile.base_radius!r} m, in place of the ellipse")
     for i, name in enumerate(driver.COUNTER_NAMES):
         attrs[f"solver_{name}"] = int(counters[i])
     return attrs

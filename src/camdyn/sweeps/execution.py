@@ -54,7 +54,8 @@ from camdyn.sweeps import worker
 from camdyn.sweeps.spec import SweepSpec
 from camdyn.sweeps.store import Checkpoint
 
-__all__ = ["check_dask_address", "compute_chunk", "prepare_chunk", "run_sweep", "default_workers", "QUIET_DASK"]
+__all__ = ["check_dask_address", "quiet_resource_tracker", "compute_chunk", "prepare_chunk", "run_sweep",
+           "default_workers", "QUIET_DASK"]
 
 STATUS_OK, STATUS_REFUSED, STATUS_SOLVER = 0, 1, 2
 MAX_STEPS_PER_REVOLUTION = 200_000
@@ -139,6 +140,9 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int = 1) -> dict:
     waits, so that Ctrl-C raises ``KeyboardInterrupt`` here at once: the kernel is told
     to stop through its abort flag and skips the points it has not begun.
     """
+    if spec.mechanism:   # Python runs, one point after another: Ctrl-C stops between two
+        function, args, prepared, finish = _chunk_task(spec, chunk, threads)
+        return finish(prepared, function(*args))
     prepared = prepare_chunk(spec, chunk)
     abort = np.zeros(1, dtype=np.int64)
     result = {}
@@ -170,9 +174,30 @@ def _warm_point(base):
     return base.p, base.y0, base.system.motion.period
 
 
+#: The warnings filter that keeps multiprocessing's resource tracker quiet.
+QUIET_TRACKER = "ignore::UserWarning:multiprocessing.resource_tracker"
+
+
+def quiet_resource_tracker() -> None:
+    """Keep the resource tracker process, which multiprocessing starts for the worker
+    pools, from writing to this process's standard error.
+
+    When an interrupt terminates the workers, the tracker may find a lock it still lists
+    but which is already gone, and warns about it (two ``UserWarning`` lines with
+    tracebacks) after camdyn has printed its one line. The tracker is a separate Python
+    process that reads ``PYTHONWARNINGS`` when it starts, so the filter is added there
+    before the first pool starts it; other warnings are untouched.
+    """
+    current = os.environ.get("PYTHONWARNINGS", "")
+    if QUIET_TRACKER not in current.split(","):
+        os.environ["PYTHONWARNINGS"] = f"{current},{QUIET_TRACKER}" if current else QUIET_TRACKER
+
+
 @contextlib.contextmanager
 def _executor(workers: int, dask: str | None, threads: int, point):
     """Yield ``(executor or None, number of workers, description)``."""
+    if workers != 0 or dask is not None:
+        quiet_resource_tracker()
     if dask is None:
         if workers == 0:
             yield None, 1, f"inline, {threads} thread(s)"
@@ -234,7 +259,10 @@ def _stop_workers(pool: cf.ProcessPoolExecutor) -> None:
 
 def _prepare_base(spec: SweepSpec):
     """The base system made ready for the kernel, or None where it cannot be (its points
-    are then refused one by one, with their reasons)."""
+    are then refused one by one, with their reasons) or where the sweep is over a
+    mechanism (which does not run the kernel)."""
+    if spec.mechanism:
+        return None
     try:
         return prepare(spec.base_system())
     except CamdynError:
@@ -329,6 +357,18 @@ def _chunk_size(spec: SweepSpec, chunk: int) -> int:
     return min(spec.chunk, spec.points - chunk * spec.chunk)
 
 
+def _chunk_task(spec: SweepSpec, chunk: int, threads: int) -> tuple:
+    """``(function, arguments, preparation, finish)`` of one chunk: what a worker runs,
+    prepared in the parent, and how its result is merged with the preparation (the
+    compiled kernel of the rocking cam-follower, or a mechanism's Python runs)."""
+    if spec.mechanism:
+        from camdyn.sweeps import mechanism_run
+        prepared = mechanism_run.prepare_chunk(spec, chunk)
+        return mechanism_run.run_chunk, mechanism_run.run_args(spec, prepared), prepared, mechanism_run.finish
+    prepared = prepare_chunk(spec, chunk)
+    return worker.run_chunk, _run_args(spec, prepared, threads), prepared, _finish
+
+
 def _drain(pool, n_workers, spec, todo, threads, store, advance) -> None:
     """Keep at most two chunks per worker in flight; the parent prepares each chunk just
     before it is submitted and saves each result as it arrives."""
@@ -338,11 +378,11 @@ def _drain(pool, n_workers, spec, todo, threads, store, advance) -> None:
         while queue or pending:
             while queue and len(pending) < 2 * n_workers:
                 c = queue.pop()
-                prepared = prepare_chunk(spec, c)
-                pending[pool.submit(worker.run_chunk, *_run_args(spec, prepared, threads))] = (c, prepared)
+                function, args, prepared, finish = _chunk_task(spec, c, threads)
+                pending[pool.submit(function, *args)] = (c, prepared, finish)
             finished, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
             for fut in finished:
-                c, prepared = pending.pop(fut)
+                c, prepared, finish = pending.pop(fut)
                 try:
                     result = fut.result()
                 except CamdynError:
@@ -350,7 +390,7 @@ def _drain(pool, n_workers, spec, todo, threads, store, advance) -> None:
                 except Exception as exc:  # a worker died or the code failed: keep what is done
                     raise SimulationError(f"chunk {c} failed on its worker ({type(exc).__name__}: {exc}); "
                                           f"finished chunks are kept, rerun to resume") from exc
-                store.save(c, _finish(prepared, result))
+                store.save(c, finish(prepared, result))
                 advance(c)
     finally:
         for fut in pending:

@@ -18,19 +18,29 @@ import numpy as np
 import xarray as xr
 
 from camdyn.analysis.kinematics import inverse_kinematics, loss_of_contact_speed
-from camdyn.errors import CamdynError
+from camdyn.errors import CamdynError, ParameterError
 from camdyn.io.atomic import atomic_output
 from camdyn.sweeps.spec import SweepSpec
 
 __all__ = ["KINEMATIC_REGIMES", "kinematic_regimes", "loss_of_contact_curve", "boundary_agreement",
-           "regime_map"]
+           "regime_map", "parse_curve", "map_curves"]
 
 #: inverse-kinematics regime codes
 KINEMATIC_REGIMES = {0: "contact kept", 1: "contact kept, vr reversal", 2: "contact lost", -1: "failed"}
 
 
 def _point_system(spec: SweepSpec, index: int):
-    return spec.base_system().with_values(**spec.point_values(index))
+    """The cam-follower of point ``index``: over a mechanism, its follower 1 with the
+    point's ``system.`` values (the rigid pivot at the prescribed starting speed, the
+    reference inverse kinematics gives)."""
+    return _with_values(spec, spec.point_values(index))
+
+
+def _with_values(spec: SweepSpec, values: dict):
+    if not spec.mechanism:
+        return spec.base_system().with_values(**values)
+    own = {key[len("system."):]: value for key, value in values.items() if key.startswith("system.")}
+    return spec.base_system().with_values(**own)
 
 
 def kinematic_regimes(spec: SweepSpec, points: int = 512) -> xr.DataArray:
@@ -55,14 +65,14 @@ def loss_of_contact_curve(spec: SweepSpec, points: int = 512) -> xr.DataArray | 
     (and the map has two dimensions); None otherwise."""
     dims = [d for d, _ in spec.dimensions]
     keys = {v.dimension: v.key for v in spec.vary}
-    speed_dims = [d for d in dims if keys.get(d) == "motion.speed"]
+    speed_dims = [d for d in dims if keys.get(d) in ("motion.speed", "system.motion.speed")]
     if len(dims) != 2 or len(speed_dims) != 1:
         return None
     other = [d for d in dims if d != speed_dims[0]][0]
     values = [v for v in spec.vary if v.dimension == other]
     curve = []
     for j in range(len(values[0].values)):
-        system = spec.base_system().with_values(**{v.key: v.values[j] for v in values})
+        system = _with_values(spec, {v.key: v.values[j] for v in values})
         try:
             curve.append(loss_of_contact_speed(system, points=points))
         except CamdynError:
@@ -92,7 +102,7 @@ def regime_map(spec: SweepSpec, **run) -> xr.Dataset:
     """Run the sweep of ``spec`` (``run``: keywords of :func:`camdyn.sweeps.run_sweep`), add
     the inverse-kinematics regime and loss-of-contact curve, and rewrite the result file."""
     from camdyn.sweeps import run_sweep
-    needed = {"regime", "impacts", "residual"}
+    needed = {"regime", "impacts"} if spec.mechanism else {"regime", "impacts", "residual"}
     if not needed <= set(spec.metrics):
         raise CamdynError(f"a regime map needs the metrics {sorted(needed)}")
     ds = run_sweep(spec, **run)
@@ -103,6 +113,47 @@ def regime_map(spec: SweepSpec, **run) -> xr.Dataset:
     if curve is not None:
         ds["loss_of_contact_speed"] = curve
     ds.attrs.update({f"agreement_{k}": v for k, v in boundary_agreement(ds).items()})
+    with atomic_output(spec.output, int(ds.nbytes)) as tmp:
+        ds.to_netcdf(tmp, engine="h5netcdf")
+    return ds
+
+
+def parse_curve(text: str, spec: SweepSpec) -> tuple[str, float]:
+    """``KIND=GUESS`` of ``camdyn map --curve`` -> (kind, guess in the second axis's SI
+    unit). The curve's parameter is the map's second axis, traced over its first;
+    ``GUESS`` is where the bifurcation lies at the first axis's first value."""
+    from camdyn.continuation.curves import CURVE_KINDS
+    from camdyn.params.config import convert_value
+    kind, sep, guess = text.partition("=")
+    kind = kind.strip()
+    if not sep or kind not in CURVE_KINDS or not guess.strip():
+        raise ParameterError(f"--curve: expected KIND=VALUE with KIND one of {', '.join(CURVE_KINDS)}, got {text!r}")
+    if len(spec.dimensions) != 2:
+        raise ParameterError("--curve needs a map over two parameters")
+    key = spec.vary[1].key
+    return kind, float(convert_value(key, guess.strip(), {}))
+
+
+def map_curves(spec: SweepSpec, ds: xr.Dataset, requests: list[tuple[str, float]], progress=None) -> xr.Dataset:
+    """Follow each ``(kind, guess)`` of ``requests`` (:func:`parse_curve`) by two-parameter
+    continuation (:func:`camdyn.continuation.curves.system_curve`) over the map's first
+    axis, the bifurcation's parameter being the second axis (searched within two grid
+    spacings of each prediction); add each as ``<kind>_curve`` along the first axis (NaN
+    where the curve ended early, the reason in its ``stopped`` attribute) and rewrite the
+    result file."""
+    from camdyn.continuation.curves import system_curve
+    first, second = spec.vary[0], spec.vary[1]
+    grid = np.asarray(second.values, dtype=float)
+    window = 2.0 * float(np.min(np.abs(np.diff(grid)))) if grid.size > 1 else 0.1 * abs(float(grid[0]))
+    for kind, guess in requests:
+        curve = system_curve(spec.base_system(), kind, second.key, first.key, first.values, guess, window,
+                             progress=progress)
+        values = np.full(len(first.values), np.nan)
+        values[:len(curve.points)] = curve.parameters
+        ds[f"{kind.replace('-', '_')}_curve"] = xr.DataArray(
+            values, dims=[first.dimension],
+            attrs={"long_name": f"{kind} by two-parameter continuation", "units": second.unit,
+                   "curve_kind": kind, "stopped": curve.stopped})
     with atomic_output(spec.output, int(ds.nbytes)) as tmp:
         ds.to_netcdf(tmp, engine="h5netcdf")
     return ds

@@ -31,6 +31,11 @@ A spec is a TOML file (or the same tables as a dict)::
     [output]
     path = "bifurcation.nc"               # relative to the working directory, or absolute
 
+A ``[system] source`` that is a mechanism file (a ``[mechanism]`` table) makes a sweep
+over that mechanism: its keys, checks and metrics are those of
+:mod:`camdyn.sweeps.mechanism_spec`, and each point runs through
+:func:`camdyn.io.mechanism_config.simulate_mechanism`.
+
 A relative ``[system] source`` TOML path is taken relative to the spec's folder; a
 relative ``[output] path`` relative to the current working directory (the result goes
 where the command runs, never beside a spec in the package's or the examples' folders).
@@ -80,6 +85,10 @@ METRICS = {
 
 _RUN_DEFAULTS = {"revolutions": 60.0, "discard": 20.0, "samples_per_revolution": 64, "rtol": 3e-7,
                  "atol": 1e-10, "chunk": 8}
+#: run defaults over a mechanism: its metrics come from the sampled run, so it is sampled
+#: finely enough to resolve an impact's contact and peak force (about 0.4 ms at the
+#: chapter 3 rig's 16 Hz)
+_MECHANISM_RUN = {"samples_per_revolution": 1024, "atol": 1e-11}
 _TABLES = {"system", "vary", "run", "metrics", "output"}
 #: Most points a sweep may have [-] (10^9 at a millisecond each is 12 CPU-days).
 MAX_POINTS = 10 ** 9
@@ -125,6 +134,9 @@ class SweepSpec:
     chunk : points per task and per checkpoint file [-].
     metrics : metric names (:data:`METRICS`); harmonics: cam harmonics kept [-].
     output : result path (netCDF).
+    mechanism : the mechanism kind of a sweep over a mechanism file (its ``system_toml``
+        is then the whole mechanism, :mod:`camdyn.sweeps.mechanism_spec`); empty for the
+        rocking cam-follower.
     """
 
     source: str
@@ -142,6 +154,7 @@ class SweepSpec:
     harmonics: int
     output: Path
     name: str = "sweep"
+    mechanism: str = ""
     _base: System | None = field(default=None, compare=False, repr=False)
 
     @property
@@ -162,7 +175,11 @@ class SweepSpec:
 
     def base_system(self) -> System:
         """The base system, rebuilt from :attr:`system_toml` (so that every process, local
-        or on a cluster without the spec's files, starts from the same numbers)."""
+        or on a cluster without the spec's files, starts from the same numbers); a sweep
+        over a mechanism's base cam-follower (follower 1)."""
+        if self.mechanism and self._base is None:
+            from camdyn.sweeps.mechanism_spec import point_mechanism
+            object.__setattr__(self, "_base", point_mechanism(self.source, self.overrides, {}).system)
         if self._base is None:
             object.__setattr__(self, "_base", system_from_toml(self.system_toml))
         return self._base
@@ -212,7 +229,17 @@ def _number(table: str, key: str, raw, integer: bool = False, minimum: float | N
     return int(raw) if integer else float(raw)
 
 
-def _values(i: int, entry: dict) -> Vary:
+def _rocking_key(key: str) -> tuple[str, callable]:
+    """The SI unit of a rocking sweep's varied ``key`` and its raw-to-SI conversion."""
+    if key not in SCHEMA:
+        raise unknown_key_error(key)
+    unit, _ = SCHEMA[key]
+    if unit in ("str", "bool", "int", "law"):
+        raise ParameterError(f"sweep spec: {key} cannot be swept (only quantities with units can)")
+    return ("Hz" if unit == "speed" else unit), (lambda raw: float(convert_value(key, raw, {})))
+
+
+def _values(i: int, entry: dict, key_unit=_rocking_key) -> Vary:
     where = f"[[vary]] #{i + 1}"
     allowed = {"key", "values", "start", "stop", "num", "spacing", "dimension"}
     extra = set(entry) - allowed
@@ -221,14 +248,10 @@ def _values(i: int, entry: dict) -> Vary:
     key = entry.get("key")
     if not isinstance(key, str):
         raise ParameterError(f"sweep spec: {where} needs key = \"dotted.parameter\"")
-    if key not in SCHEMA:
-        raise unknown_key_error(key)
-    unit, _ = SCHEMA[key]
-    if unit in ("str", "bool", "int", "law"):
-        raise ParameterError(f"sweep spec: {key} cannot be swept (only quantities with units can)")
+    si_unit, convert = key_unit(key)
 
     def si(raw):
-        return float(convert_value(key, raw, {}))
+        return convert(raw)
 
     if "values" in entry:
         if {"start", "stop", "num", "spacing"} & set(entry):
@@ -258,9 +281,8 @@ def _values(i: int, entry: dict) -> Vary:
     dimension = entry.get("dimension", key)
     if not isinstance(dimension, str) or not dimension.strip():
         raise ParameterError(f"sweep spec: {where} dimension must be a name")
-    si_unit = unit if unit != "speed" else "Hz"
     written = entry["values"][0] if "values" in entry else entry["start"]
-    display, factor = _display_unit(key, written, si_unit)
+    display, factor = _display_unit(convert, written, si_unit)
     return Vary(key=key, dimension=dimension.strip(), values=tuple(float(v) for v in values),
                 unit=si_unit, display_unit=display, display_factor=factor)
 
@@ -269,7 +291,7 @@ def _values(i: int, entry: dict) -> Vary:
 _LEADING_NUMBER = re.compile(r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*")
 
 
-def _display_unit(key: str, raw, si_unit: str) -> tuple[str, float]:
+def _display_unit(convert, raw, si_unit: str) -> tuple[str, float]:
     """The unit a swept value was written in (``"3.5 mm"`` -> ``"mm"``) and the display
     value of one SI unit (1000); ``("", 1.0)`` for bare numbers, and the SI unit for units
     with an offset (degC)."""
@@ -277,7 +299,7 @@ def _display_unit(key: str, raw, si_unit: str) -> tuple[str, float]:
     if not text or text == si_unit:
         return text, 1.0
     try:
-        one, zero = (float(convert_value(key, f"{x} {text}", {})) for x in (1, 0))
+        one, zero = (convert(f"{x} {text}") for x in (1, 0))
     except CamdynError:
         return si_unit, 1.0
     if zero != 0.0 or not math.isfinite(one) or one <= 0.0:
@@ -300,13 +322,20 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
     overrides = sys_t.get("set", {})
     if not isinstance(overrides, dict):
         raise ParameterError("sweep spec: [system] set must be a table of KEY = \"VALUE\"")
-    toml_text = system_to_toml(load_system(source, overrides))
-    base = system_from_toml(toml_text)
+    from camdyn.params.mechanism import is_mechanism
+    if is_mechanism(source):
+        from camdyn.sweeps import mechanism_spec
+        kind, toml_text = mechanism_spec.base_mechanism(source, overrides)
+        base, key_unit = None, mechanism_spec.key_unit
+    else:
+        kind, key_unit = "", _rocking_key
+        toml_text = system_to_toml(load_system(source, overrides))
+        base = system_from_toml(toml_text)
 
     entries = spec.get("vary", [])
     if not isinstance(entries, list) or not entries:
         raise ParameterError("sweep spec: give at least one [[vary]] table")
-    vary = tuple(_values(i, e if isinstance(e, dict) else {}) for i, e in enumerate(entries))
+    vary = tuple(_values(i, e if isinstance(e, dict) else {}, key_unit) for i, e in enumerate(entries))
     keys = [v.key for v in vary]
     if len(set(keys)) != len(keys):
         raise ParameterError(f"sweep spec: a parameter is varied twice ({keys})")
@@ -321,17 +350,12 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
         raise ParameterError(f"sweep spec: {points:.3g} points ({' x '.join(str(n) for n in dims.values())}) is more "
                              f"than {MAX_POINTS:.0e}; at a millisecond or more each that is beyond any machine's "
                              f"reach: coarsen the grid or split the sweep")
-    # every value on its own must make a valid system (negative mass, unreachable cam, ...);
-    # only combinations of values may fail (those points are recorded as failed)
-    from camdyn.simulation.runner import prepare
-    for v in vary:
-        for value in sorted(set(v.values)):
-            try:
-                prepare(base.with_values(**{v.key: value}))
-            except CamdynError as exc:
-                raise ParameterError(f"sweep spec: {v.key} = {value:g} {v.unit}: {exc}") from None
+    _check_values(base, vary, source, overrides)
 
-    run = {**_RUN_DEFAULTS, **_table(spec, "run", set(_RUN_DEFAULTS))}
+    run = {**_RUN_DEFAULTS, **(_MECHANISM_RUN if kind else {}), **_table(spec, "run", set(_RUN_DEFAULTS))}
+    if kind and "atol" in spec.get("run", {}):
+        raise ParameterError("sweep spec: [run] atol: a mechanism runs with its entry's own absolute tolerance "
+                             "(1e-11); give rtol only")
     revolutions = int(_number("run", "revolutions", run["revolutions"], integer=True))
     discard = int(_number("run", "discard", run["discard"], integer=True, minimum=0))
     if discard >= revolutions:
@@ -346,14 +370,16 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
     chunk = int(_number("run", "chunk", run["chunk"], integer=True))
 
     met = _table(spec, "metrics", {"names", "harmonics"})
-    names = met.get("names", list(METRICS))
+    allowed = list(METRICS) if not kind else list(mechanism_spec.KIND_METRICS[kind])
+    names = met.get("names", allowed)
     if not isinstance(names, list) or not names:
         raise ParameterError("sweep spec: [metrics] names must be a non-empty list")
-    unknown = [n for n in names if n not in METRICS]
+    unknown = [n for n in names if n not in allowed]
     if unknown:
-        raise ParameterError(f"sweep spec: unknown metric(s) {unknown}; choose from {list(METRICS)}")
+        over = f" over a {kind} mechanism" if kind else ""
+        raise ParameterError(f"sweep spec: [metrics] names: unknown metric(s){over} {unknown}; choose from {allowed}")
     harmonics = int(_number("metrics", "harmonics", met.get("harmonics", 10), integer=True))
-    if 2 * harmonics >= samples:
+    if not kind and 2 * harmonics >= samples:
         raise ParameterError(f"sweep spec: {harmonics} harmonics need samples_per_revolution > {2 * harmonics}")
 
     out = _table(spec, "output", {"path"})
@@ -365,7 +391,24 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
                      dimensions=tuple(dims.items()), revolutions=revolutions, discard=discard,
                      samples_per_revolution=samples, rtol=rtol, atol=atol, chunk=chunk,
                      metrics=tuple(dict.fromkeys(names)), harmonics=harmonics, output=path, name=name,
-                     _base=base)
+                     mechanism=kind, _base=base)
+
+
+def _check_values(base: System | None, vary, source: str, overrides: dict) -> None:
+    """Every value on its own must make a valid system (negative mass, unreachable cam,
+    ...) or mechanism (``base`` None); only combinations of values may fail (those
+    points are recorded as failed)."""
+    if base is None:
+        from camdyn.sweeps.mechanism_spec import check_values
+        check_values(source, overrides, vary)
+        return
+    from camdyn.simulation.runner import prepare
+    for v in vary:
+        for value in sorted(set(v.values)):
+            try:
+                prepare(base.with_values(**{v.key: value}))
+            except CamdynError as exc:
+                raise ParameterError(f"sweep spec: {v.key} = {value:g} {v.unit}: {exc}") from None
 
 
 def result_bytes(points: int, metrics, harmonics: int, kept: int) -> int:

@@ -169,7 +169,7 @@ class Checkpoint:
             raise ParameterError(f"cannot assemble {spec.output}: {len(missing)} chunks are missing")
         out = Path(spec.output)
         kept = spec.kept_revolutions
-        layout = M.variables(spec.metrics, spec.harmonics, kept)
+        layout = _layout(spec)
         dims = [d for d, _ in spec.dimensions]
         with atomic_output(out) as tmp, h5netcdf.File(tmp, "w") as f:
             sizes = dict(spec.dimensions)
@@ -177,8 +177,14 @@ class Checkpoint:
                 sizes["revolution"] = kept
             if "spectrum" in spec.metrics:
                 sizes["harmonic"] = spec.harmonics
+            for extra, extra_sizes, *_ in layout.values():
+                sizes.update(zip(extra, extra_sizes))
             f.dimensions = sizes
             _coordinates(f, spec)
+            if "follower" in sizes:
+                var = f.create_variable("follower", ("follower",), "i8")
+                var[:] = np.arange(1, sizes["follower"] + 1)
+                var.attrs.update(units="1", long_name="follower number")
             coords = " ".join(v.key for v in spec.vary if v.key != v.dimension)
             variables = {}
             for name, (extra, _, dtype, unit, long_name) in layout.items():
@@ -212,6 +218,15 @@ class Checkpoint:
                 yield first, {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
                 first = (chunk + 1) * self.spec.chunk
                 parts, size = [], 0
+
+
+def _layout(spec: SweepSpec) -> dict:
+    """The result's metric variables (:func:`camdyn.sweeps.metrics.variables`, or
+    :func:`camdyn.sweeps.mechanism_metrics.variables` for a sweep over a mechanism)."""
+    if spec.mechanism:
+        from camdyn.sweeps import mechanism_metrics
+        return mechanism_metrics.variables(spec.mechanism, spec.metrics, spec.kept_revolutions)
+    return M.variables(spec.metrics, spec.harmonics, spec.kept_revolutions)
 
 
 def _checksum(arrays: dict) -> str:
@@ -290,7 +305,12 @@ def _write_rows(var, rows: np.ndarray, start: int, shape: tuple[int, ...]) -> No
 
 
 def _global_attributes(spec: SweepSpec) -> dict:
-    return {
+    definitions = METRICS
+    extra = {}
+    if spec.mechanism:
+        from camdyn.sweeps.mechanism_spec import MECHANISM_METRICS as definitions
+        extra = {"mechanism": spec.mechanism, "mechanism_source": str(spec.source)}
+    return {**extra,
         "title": f"camdyn sweep {spec.name}",
         "source": f"camdyn {__version__}",
         "sweep_digest": spec.digest(),
@@ -302,5 +322,5 @@ def _global_attributes(spec: SweepSpec) -> dict:
         "rtol": spec.rtol,
         "atol": spec.atol,
         "metrics": ", ".join(spec.metrics),
-        "metric_definitions": "; ".join(f"{m}: {METRICS[m]}" for m in spec.metrics),
+        "metric_definitions": "; ".join(f"{m}: {definitions[m]}" for m in spec.metrics),
     }

@@ -23,10 +23,23 @@ linear oscillator with a closed-form solution, and system 2 the same oscillator 
 a rigid wall with Newton's restitution (:mod:`camdyn.model.impact_oscillator`), whose
 impacts reset the state in :func:`transition`; system 3 is two coupled oscillators, the
 second against a wall (:mod:`camdyn.model.coupled_oscillator`, 4 states, 1 guard). The
-three test the integrator.
+three test the integrator. System 4 is a translating follower on a cam of any profile,
+with rigid (Newton restitution, sustained contact) or compliant contact
+(:mod:`camdyn.model.translating_follower`, 2 states, 3 guards: gap, force, joints). The mechanisms, ids 5
+and up, are dispatched by :mod:`camdyn.systems.mechanisms`, each function here sending
+them there in its first lines: system 5 is the stick-slip oscillator
+(:mod:`camdyn.model.stick_slip`, 3 states, 3 guards) and system 6 the cam-follower with
+the cam as a rigid body on a driven shaft (:mod:`camdyn.model.driven_cam`, 8 states, the
+cam-follower's 3 guards and modes); system 7 the rocking follower on a flexible pivot
+bearing (:mod:`camdyn.model.flexible_pivot`, 8 states, the same guards and modes);
+system 9 two rocking followers on one driven cam (:mod:`camdyn.model.two_followers`,
+11 states, per follower the cam-follower's guards and mode with a stick phase); system 10
+the translating follower with friction at its cam contact
+(:mod:`camdyn.model.sliding_follower`, 4 states, 5 guards).
 
-A new model gets an id here and a branch in each function; this module is the only one
-that imports the models.
+A new model gets an id here (or, for a mechanism, in :mod:`camdyn.systems.mechanisms`)
+and a branch in each function; these two modules are the only ones that import the
+models.
 """
 
 from __future__ import annotations
@@ -36,20 +49,33 @@ import math
 import numba
 import numpy as np
 
-from camdyn.model import coupled_oscillator, dynamics, impact_oscillator
+from camdyn.model import contact, coupled_oscillator, dynamics, impact_oscillator
 from camdyn.model import layout as L
+from camdyn.model import translating_follower as translating
+from camdyn.systems import mechanisms
 
 CAM_FOLLOWER = 0
 OSCILLATOR = 1
 RIGID_IMPACT = 2
 COUPLED_OSCILLATORS = 3
+TRANSLATING_FOLLOWER = 4
+# --- mechanisms (ids 5 and up; their branches are the blocks marked "mechanisms" below)
+STICK_SLIP = mechanisms.STICK_SLIP
+DRIVEN_CAM = mechanisms.DRIVEN_CAM
+FLEXIBLE_PIVOT = mechanisms.FLEXIBLE_PIVOT
+TWO_FOLLOWERS = mechanisms.TWO_FOLLOWERS
+SLIDING_FOLLOWER = mechanisms.SLIDING_FOLLOWER
 
 
 @numba.njit(cache=True)
 def state_size(system):
     """Number of state components."""
+    if system >= STICK_SLIP:   # mechanisms
+        return mechanisms.sizes(system)[0]
     if system == COUPLED_OSCILLATORS:
         return coupled_oscillator.STATE_SIZE
+    if system == TRANSLATING_FOLLOWER:
+        return translating.STATE_SIZE
     return 3
 
 
@@ -57,25 +83,74 @@ def state_size(system):
 def controlled_size(system):
     """Number of leading state components under error control: the cam-follower's and
     the oscillators' third component is a quadrature that feeds back into nothing."""
+    if system >= STICK_SLIP:   # mechanisms
+        return mechanisms.sizes(system)[1]
     if system == COUPLED_OSCILLATORS:
         return coupled_oscillator.STATE_SIZE
+    if system == TRANSLATING_FOLLOWER:
+        return translating.STATE_SIZE
     return 2
 
 
 @numba.njit(cache=True)
 def guard_count(system):
     """Number of guard functions."""
+    if system >= STICK_SLIP:   # mechanisms
+        return mechanisms.sizes(system)[2]
     if system == CAM_FOLLOWER:
         return 3
+    if system == TRANSLATING_FOLLOWER:
+        return translating.GUARD_COUNT
     return 1
 
 
 @numba.njit(cache=True)
 def mode_size(system):
     """Number of slots of the mode vector."""
+    if system >= STICK_SLIP:   # mechanisms
+        return mechanisms.sizes(system)[3]
     if system == CAM_FOLLOWER:
         return L.MODE_SIZE
+    if system == TRANSLATING_FOLLOWER:
+        return translating.MODE_SIZE
     return 1
+
+
+@numba.njit(cache=True)
+def variational_jacobian(system, t, y, f0, mode, p, jac):
+    """The Jacobian for the variational system (:mod:`camdyn.systems.variational`), which
+    integrates ``Phi' = J Phi`` under error control: the cam-follower's by central
+    differences (:func:`camdyn.model.dynamics.central_jacobian`, whose noise is far below
+    the forward differences' that :func:`jacobian` keeps for the Rosenbrock steps); every
+    other model's is :func:`jacobian`."""
+    if system == CAM_FOLLOWER:
+        jac[:, :] = 0.0
+        jac[0, 1] = 1.0
+        dynamics.central_jacobian(t, y, f0, mode, p, jac)
+        return
+    jacobian(system, t, y, f0, mode, p, jac)
+
+
+@numba.njit(cache=True)
+def carried_slot(system, p):
+    """The mode slot that holds a value of the state at the last event on which the
+    right-hand side depends under the parameters ``p`` (the approach velocity [m/s] of
+    the restitution-parameterised contact laws, set at contact onset), or -1 for none.
+    The variational system carries that value's derivatives
+    (:mod:`camdyn.systems.variational`). Two followers on one cam keep one such slot per
+    follower and are not covered (-1)."""
+    if system == CAM_FOLLOWER or system == DRIVEN_CAM or system == FLEXIBLE_PIVOT:
+        return L.MODE_APPROACH if p[L.DAMPING_LAW] >= contact.FIRST_RESTITUTION_CODE else -1
+    if system == TRANSLATING_FOLLOWER:
+        return 1 if p[translating.DAMPING_LAW] >= contact.FIRST_RESTITUTION_CODE else -1
+    return -1
+
+
+@numba.njit(cache=True)
+def carries(system):
+    """Whether the mode of ``system`` can hold a value carried from an event
+    (:func:`carried_slot` for some parameters)."""
+    return system == CAM_FOLLOWER or system == DRIVEN_CAM or system == FLEXIBLE_PIVOT or system == TRANSLATING_FOLLOWER
 
 
 # --- forced linear oscillator: y'' + 2 zeta w y' + w^2 y = A cos(W t); p = (w, zeta, A, W, stiff)
@@ -88,10 +163,15 @@ def _osc_rhs(t, y, p, dydt):
 
 @numba.njit(cache=True)
 def rhs(system, t, y, mode, p, dydt):
+    if system >= STICK_SLIP:   # mechanisms
+        mechanisms.rhs(system, t, y, mode, p, dydt)
+        return
     if system == CAM_FOLLOWER:
         dynamics.rhs(t, y, mode, p, dydt)
     elif system == COUPLED_OSCILLATORS:
         coupled_oscillator.rhs(t, y, p, dydt)
+    elif system == TRANSLATING_FOLLOWER:
+        translating.rhs(t, y, mode, p, dydt)
     else:
         _osc_rhs(t, y, p, dydt)
 
@@ -102,10 +182,15 @@ def rhs_inline(system, t, y, mode, p, dydt):
     it saves a call and the reference counting of its array arguments per evaluation,
     about a fifth of a DOP853 step; the other callers keep the call, which compiles
     faster."""
+    if system >= STICK_SLIP:   # mechanisms
+        mechanisms.rhs(system, t, y, mode, p, dydt)
+        return
     if system == CAM_FOLLOWER:
         dynamics.rhs(t, y, mode, p, dydt)
     elif system == COUPLED_OSCILLATORS:
         coupled_oscillator.rhs(t, y, p, dydt)
+    elif system == TRANSLATING_FOLLOWER:
+        translating.rhs(t, y, mode, p, dydt)
     else:
         _osc_rhs(t, y, p, dydt)
 
@@ -113,8 +198,14 @@ def rhs_inline(system, t, y, mode, p, dydt):
 @numba.njit(cache=True)
 def jacobian(system, t, y, f0, mode, p, jac):
     """The Jacobian ``jac = d f / d y`` (n x n) at ``(t, y)``, where ``f0 = f(t, y)``."""
+    if system >= STICK_SLIP:   # mechanisms
+        mechanisms.jacobian(system, t, y, f0, mode, p, jac)
+        return
     if system == COUPLED_OSCILLATORS:
         coupled_oscillator.jacobian(p, jac)
+        return
+    if system == TRANSLATING_FOLLOWER:
+        translating.jacobian(t, y, mode, p, jac)
         return
     jac[:, :] = 0.0
     jac[0, 1] = 1.0   # second-order systems in first-order form; the quadrature's column is zero
@@ -129,12 +220,17 @@ def jacobian(system, t, y, f0, mode, p, jac):
 
 @numba.njit(cache=True)
 def guards(system, t, y, f, known, p, values, rates):
+    if system >= STICK_SLIP:   # mechanisms
+        mechanisms.guards(system, t, y, f, known, p, values, rates)
+        return
     if system == CAM_FOLLOWER:
         dynamics.guards(t, y, f[1] if known else math.nan, p, values, rates)
     elif system == RIGID_IMPACT:
         impact_oscillator.guards(t, y, p, values, rates)
     elif system == COUPLED_OSCILLATORS:
         coupled_oscillator.guards(t, y, p, values, rates)
+    elif system == TRANSLATING_FOLLOWER:
+        translating.guards(t, y, p, values, rates)
     else:
         values[0] = y[0]
         rates[0] = y[1]
@@ -142,21 +238,14 @@ def guards(system, t, y, f, known, p, values, rates):
 
 @numba.njit(cache=True)
 def expected_sign(system, k, mode, p):
+    if system >= STICK_SLIP:   # mechanisms
+        return mechanisms.expected_sign(system, k, mode, p)
     if system == CAM_FOLLOWER:
-        contact = mode[L.MODE_CONTACT] > 0.5
-        if k == 0:
-            return 1.0 if contact else -1.0
-        if not contact:
-            return 0.0
-        if k == 1:
-            return mode[L.MODE_SLIP] if p[L.FRICTION_LAW] == 1.0 else 0.0
-        # peak penetration of an impact, for the impact table (laws D and E switch on
-        # the sign of delta_dot inside the force law and need no event)
-        if mode[L.MODE_IMPACT] > 0.5:
-            return 1.0 if mode[L.MODE_COMPRESSING] > 0.5 else -1.0
-        return 0.0
+        return dynamics.mode_expected_sign(k, mode, p)
     if system == RIGID_IMPACT or system == COUPLED_OSCILLATORS:
         return 1.0   # the gap to the wall stays positive in flight
+    if system == TRANSLATING_FOLLOWER:
+        return translating.expected_sign(k, mode, p)
     if k == 0:
         return mode[0]
     return 0.0
@@ -164,44 +253,33 @@ def expected_sign(system, k, mode, p):
 
 @numba.njit(cache=True)
 def transition(system, k, t, y, values, mode, p):
+    if system >= STICK_SLIP:   # mechanisms
+        mechanisms.transition(system, k, t, y, values, mode, p)
+        return
     if system == CAM_FOLLOWER:
-        if k == 0:
-            if mode[L.MODE_CONTACT] > 0.5:
-                mode[L.MODE_CONTACT] = 0.0
-            else:
-                mode[L.MODE_CONTACT] = 1.0
-                mode[L.MODE_IMPACT] = 1.0
-                mode[L.MODE_APPROACH] = values[2]
-                mode[L.MODE_SLIP] = 1.0 if values[1] >= 0.0 else -1.0
-                mode[L.MODE_COMPRESSING] = 1.0 if values[2] > 0.0 else 0.0
-        elif k == 1:
-            mode[L.MODE_SLIP] = -mode[L.MODE_SLIP]
-        else:
-            mode[L.MODE_COMPRESSING] = 1.0 - mode[L.MODE_COMPRESSING]
-            if mode[L.MODE_COMPRESSING] < 0.5:
-                # the impact's peak is passed (its force peaks at or before it): stop
-                # watching delta_dot, which in sustained stiff contact hovers at zero and
-                # would cross it on rounding noise alone
-                mode[L.MODE_IMPACT] = 0.0
+        dynamics.mode_transition(k, values, mode)
     elif system == RIGID_IMPACT:
         impact_oscillator.reset(y, p)   # the state jumps; the mode stays
     elif system == COUPLED_OSCILLATORS:
         coupled_oscillator.reset(y, p)
+    elif system == TRANSLATING_FOLLOWER:
+        translating.transition(k, t, y, mode, p)
     else:
         mode[0] = -mode[0]
 
 
 @numba.njit(cache=True)
 def initial_mode(system, t, y, p, mode):
+    if system >= STICK_SLIP:   # mechanisms
+        mechanisms.initial_mode(system, t, y, p, mode)
+        return
     values = np.empty(guard_count(system))
     rates = np.empty(guard_count(system))
     guards(system, t, y, y, False, p, values, rates)
     if system == CAM_FOLLOWER:
-        mode[L.MODE_CONTACT] = 1.0 if values[0] > 0.0 else 0.0
-        mode[L.MODE_SLIP] = 1.0 if values[1] >= 0.0 else -1.0
-        mode[L.MODE_COMPRESSING] = 1.0 if values[2] > 0.0 else 0.0
-        mode[L.MODE_APPROACH] = p[L.V_REFERENCE]
-        mode[L.MODE_IMPACT] = 0.0
+        dynamics.mode_initial(values, p, mode)
+    elif system == TRANSLATING_FOLLOWER:
+        translating.initial_mode(t, y, p, mode)
     else:
         mode[0] = 1.0 if values[0] >= 0.0 else -1.0
 
@@ -210,31 +288,41 @@ def initial_mode(system, t, y, p, mode):
 def regime(system, mode, p):
     """Index (0 or 1) of the dynamic regime of a mode; the driver remembers the last step
     size of each regime, so that a step after an event starts at the right scale."""
+    if system >= STICK_SLIP:   # mechanisms
+        return mechanisms.regime(system, mode, p)
     if system == CAM_FOLLOWER:
         return 1 if mode[L.MODE_CONTACT] > 0.5 else 0
+    if system == TRANSLATING_FOLLOWER:
+        return translating.regime(mode)
     return 0
 
 
 @numba.njit(cache=True)
 def preferred_method(system, mode, p):
     """Stepper for automatic selection: 1 Dormand-Prince 5(4), 2 RODAS4, 3 DOP853."""
+    if system >= STICK_SLIP:   # mechanisms
+        return 3
     if system == CAM_FOLLOWER:
         # Measured (docs/integrator.md): on the sustained, lightly damped contact of the
         # chapter 4 rig RODAS4 suffers order reduction at |h omega_contact| ~ 1 and needs
         # more steps than the explicit methods at equal accuracy, and impacts are not
         # stiff; DOP853 needs the fewest right-hand-side calls in both regimes.
         return 3
-    if system == RIGID_IMPACT or system == COUPLED_OSCILLATORS:
+    if system == RIGID_IMPACT or system == COUPLED_OSCILLATORS or system == TRANSLATING_FOLLOWER:
         return 3
     return 2 if p[4] > 0.5 else 1
 
 
 @numba.njit(cache=True)
 def monitor(system, t, y, mode, p):
+    if system >= STICK_SLIP:   # mechanisms
+        return mechanisms.monitor(system, t, y, mode, p)
     if system == CAM_FOLLOWER:
         # peak force of impacts only (the impact table); free flight and sustained
         # contact cost nothing
         if mode[L.MODE_CONTACT] > 0.5 and mode[L.MODE_IMPACT] > 0.5:
             return dynamics.evaluate(t, y[0], y[1], mode, p)[1]
         return 0.0
+    if system == TRANSLATING_FOLLOWER:
+        return translating.contact_force(t, y, mode, p)   # the largest force of a contact
     return abs(y[0])

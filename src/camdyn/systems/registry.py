@@ -5,7 +5,8 @@ A system id below :data:`VARIATIONAL` is a model (:mod:`camdyn.systems.models`, 
 the interface each model provides is described and where a new model is added); the id
 ``VARIATIONAL + model`` is that model's variational system
 (:mod:`camdyn.systems.variational`: the state with its state-transition matrix, and the
-saltation matrix at every event). Every function here dispatches on that split; the
+saltation matrix at every event), and ``k PARAMETRIC + VARIATIONAL + model`` the same
+with ``k`` parameter sensitivities. Every function here dispatches on that split; the
 driver sizes its arrays from :func:`state_size`, :func:`guard_count` and
 :func:`mode_size`.
 """
@@ -15,24 +16,38 @@ from __future__ import annotations
 import numba
 
 from camdyn.systems import models, variational
-from camdyn.systems.models import CAM_FOLLOWER, COUPLED_OSCILLATORS, OSCILLATOR, RIGID_IMPACT
-from camdyn.systems.variational import VARIATIONAL
+from camdyn.systems.models import (
+    CAM_FOLLOWER,
+    COUPLED_OSCILLATORS,
+    DRIVEN_CAM,
+    FLEXIBLE_PIVOT,
+    OSCILLATOR,
+    RIGID_IMPACT,
+    SLIDING_FOLLOWER,
+    STICK_SLIP,
+    TRANSLATING_FOLLOWER,
+    TWO_FOLLOWERS,
+)
+from camdyn.systems.variational import PARAMETRIC, VARIATIONAL
 
-__all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", "VARIATIONAL", "state_size",
-           "controlled_size", "guard_count", "mode_size", "rhs", "rhs_inline", "jacobian", "guards",
+__all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", "TRANSLATING_FOLLOWER", "STICK_SLIP",
+           "DRIVEN_CAM", "FLEXIBLE_PIVOT", "TWO_FOLLOWERS", "SLIDING_FOLLOWER",
+           "VARIATIONAL", "PARAMETRIC", "state_size", "controlled_size",
+           "guard_count", "mode_size", "rhs", "rhs_inline", "jacobian", "guards",
            "expected_sign", "transition", "initial_mode", "regime", "preferred_method", "monitor"]
 
 
 @numba.njit(cache=True)
 def _model(system):
-    return system - VARIATIONAL if system >= VARIATIONAL else system
+    return variational.split(system)[0] if system >= VARIATIONAL else system
 
 
 @numba.njit(cache=True)
 def state_size(system):
     """Number of state components."""
     if system >= VARIATIONAL:
-        return variational.state_size(system - VARIATIONAL)
+        model, count = variational.split(system)
+        return variational.state_size(model, count)
     return models.state_size(system)
 
 
@@ -41,7 +56,8 @@ def controlled_size(system):
     """Number of leading state components under error control (a variational system's
     all: its state and its matrix)."""
     if system >= VARIATIONAL:
-        return variational.state_size(system - VARIATIONAL)
+        model, count = variational.split(system)
+        return variational.state_size(model, count)
     return models.controlled_size(system)
 
 
@@ -53,14 +69,19 @@ def guard_count(system):
 
 @numba.njit(cache=True)
 def mode_size(system):
-    """Number of slots of the mode vector."""
-    return models.mode_size(_model(system))
+    """Number of slots of the mode vector (a variational system's adds the derivatives
+    of a carried mode value: :func:`camdyn.systems.variational.mode_size`)."""
+    if system >= VARIATIONAL:
+        model, count = variational.split(system)
+        return variational.mode_size(model, count)
+    return models.mode_size(system)
 
 
 @numba.njit(cache=True)
 def rhs(system, t, y, mode, p, dydt):
     if system >= VARIATIONAL:
-        variational.rhs(system - VARIATIONAL, t, y, mode, p, dydt)
+        model, count = variational.split(system)
+        variational.rhs(model, count, t, y, mode, p, dydt)
     else:
         models.rhs(system, t, y, mode, p, dydt)
 
@@ -69,7 +90,8 @@ def rhs(system, t, y, mode, p, dydt):
 def rhs_inline(system, t, y, mode, p, dydt):
     """:func:`rhs` compiled into its caller (numba IR inlining): DOP853's stages use it."""
     if system >= VARIATIONAL:
-        variational.rhs(system - VARIATIONAL, t, y, mode, p, dydt)
+        model, count = variational.split(system)
+        variational.rhs(model, count, t, y, mode, p, dydt)
     else:
         models.rhs_inline(system, t, y, mode, p, dydt)
 
@@ -78,7 +100,8 @@ def rhs_inline(system, t, y, mode, p, dydt):
 def jacobian(system, t, y, f0, mode, p, jac):
     """The Jacobian ``jac = d f / d y`` (n x n) at ``(t, y)``, where ``f0 = f(t, y)``."""
     if system >= VARIATIONAL:
-        variational.jacobian(system - VARIATIONAL, t, y, f0, mode, p, jac)
+        model, count = variational.split(system)
+        variational.jacobian(model, count, t, y, f0, mode, p, jac)
     else:
         models.jacobian(system, t, y, f0, mode, p, jac)
 
@@ -88,7 +111,7 @@ def guards(system, t, y, f, known, p, values, rates):
     """Guard values and their exact rates (NaN where unknown) at ``(t, y)``; ``f`` is
     ``dy/dt`` there when ``known``."""
     if system >= VARIATIONAL:
-        model = system - VARIATIONAL
+        model = _model(system)
         n = models.state_size(model)
         models.guards(model, t, y[:n], f[:n], known, p, values, rates)
     else:
@@ -105,7 +128,8 @@ def expected_sign(system, k, mode, p):
 def transition(system, k, t, y, values, mode, p):
     """The new mode after guard ``k`` crossed, and the state's reset if any."""
     if system >= VARIATIONAL:
-        variational.transition(system - VARIATIONAL, k, t, y, values, mode, p)
+        model, count = variational.split(system)
+        variational.transition(model, count, k, t, y, values, mode, p)
     else:
         models.transition(system, k, t, y, values, mode, p)
 

@@ -107,6 +107,11 @@ class ReferenceModel:
         m = self.s.motion
         if m.kind == "constant":
             return self.theta0 + self.omega * t, self.omega
+        if m.kind == "ramp":   # uniform acceleration for ramp_time, then the final speed
+            w0 = 2 * math.pi * m.start_speed * m.direction
+            rate = (self.omega - w0) / m.ramp_time
+            tr = min(t, m.ramp_time)
+            return self.theta0 + w0 * tr + 0.5 * rate * tr * tr + self.omega * (t - tr), w0 + rate * tr
         w = 2 * math.pi * m.frequency * m.direction
         return (self.theta0 + 0.5 * m.amplitude * math.sin(w * t), 0.5 * m.amplitude * w * math.cos(w * t))
 

@@ -1,0 +1,191 @@
+"""``camdyn continue PRESET_OR_TOML``: a branch of periodic orbits in one parameter, with
+its stability and bifurcations (pseudo-arclength continuation of shooting solutions)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import List, Optional
+
+import typer
+
+from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, err_console, load_source
+from camdyn.cli.outputs import announce, check_outputs, emit_json
+from camdyn.errors import ParameterError
+
+
+def _value(text: str, key: str, unit: str) -> float:
+    """A parameter value [SI] from text with its unit (a bare number only for a
+    dimensionless parameter, as for ``--set``)."""
+    from camdyn.params.units import parse_quantity, parse_speed
+
+    if unit == "Hz":
+        return parse_speed(text, key)
+    return float(parse_quantity(text, unit, key))
+
+
+def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
+                    set_: Optional[List[str]] = SetOption,
+                    parameter: str = typer.Option("motion.speed", help="Dotted key continued, e.g. motion.speed, "
+                                                                       "cam.runout (camdyn presets keys)."),
+                    start: str = typer.Option(..., "--from", help="First value, with a unit: 5Hz, 1.2mm."),
+                    stop: str = typer.Option(..., "--to", help="Last value, with a unit."),
+                    period: int = typer.Option(1, help="Forcing periods per orbit period (2 for period-2 orbits)."),
+                    segments: int = typer.Option(1, help="Shooting segments per orbit period: more than 1 is "
+                                                         "multiple shooting, for strongly unstable orbits."),
+                    step: float = typer.Option(0.02, help="First arclength step, relative to the parameter's "
+                                                          "start value [-]."),
+                    max_points: int = typer.Option(200, help="Most orbits on the branch."),
+                    transient: int = typer.Option(50, help="Cam periods simulated before the first orbit is "
+                                                           "sought."),
+                    doublings: int = typer.Option(1, help="Period doublings followed: at each one located, "
+                                                          "switch onto the period-2k branch and continue it "
+                                                          "(0: none, 2: their doublings too)."),
+                    brute_force: int = typer.Option(0, "--brute-force",
+                                                    help="Draw the brute-force bifurcation diagram under the "
+                                                         "branches in --plot: a sweep of this many values over "
+                                                         "the range, 300 cam periods each, 200 discarded "
+                                                         "(0: none)."),
+                    plot: Optional[Path] = typer.Option(None, help="Figure of the branch (.png, .pdf, ...)."),
+                    out: Optional[Path] = typer.Option(None, help="Result file (.nc)."),
+                    force: bool = ForceOption,
+                    quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
+                    json_: bool = JsonOption):
+    """Continue periodic orbits over a parameter range: stability from the Floquet
+    multipliers; folds, period doublings, Neimark-Sacker bifurcations, grazing, loss of
+    contact and sliding reversal located on the way; the period-doubled branches
+    followed (docs/continuation.md). A translating follower (the preset alzate) is
+    continued in motion.speed, its orbits taken at cam angle 0. A mechanism file (the
+    flexible pivot, or two followers with drive.kind = 'prescribed') is continued in a
+    system key or, for the flexible pivot, pivot.stiffness or pivot.damping."""
+    from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset, switch_doublings
+
+    check_outputs(netcdf=out, figure=plot, force=force)
+    from camdyn.params.profiles import is_translating
+
+    if segments < 1:
+        raise ParameterError(f"--segments must be at least 1, got {segments}")
+    if is_translating(source):
+        if segments != 1:
+            raise ParameterError("--segments is for the cam-follower; the translating follower is continued by "
+                                 "single shooting")
+        from camdyn.cli.translating import continue_translating_command
+        continue_translating_command(source, set_, parameter, start, stop, period, step, max_points, transient,
+                                     doublings, brute_force, plot, out, quiet, json_)
+        return
+    system, unit, mechanism = _load(source, set_, parameter, brute_force)
+    first, last = _value(start, "--from", unit), _value(stop, "--to", unit)
+    if first == last:
+        raise ParameterError("--from and --to must differ")
+    from camdyn.continuation.branches import MIN_STEP
+
+    if period < 1 or max_points < 2 or transient < 1 or not step >= MIN_STEP:
+        raise ParameterError(f"--period and --transient must be at least 1, --max-points at least 2, --step at "
+                             f"least {MIN_STEP:g}")
+    if doublings < 0 or brute_force < 0 or brute_force == 1:
+        raise ParameterError("--doublings must be at least 0, --brute-force 0 or at least 2")
+    if brute_force and plot is None:
+        raise ParameterError("--brute-force draws the diagram under the branches of --plot: give --plot")
+    problem, branch = _trace(system, parameter, first, last, period, step, max_points, transient, quiet or json_,
+                             segments, mechanism)
+    branches = [branch, *switch_doublings(problem, branch, last, doublings, step, max_points)]
+    records = [branch_records(problem, b) for b in branches]
+    bifurcations = bifurcation_records(branches)
+    files = []
+    if out is not None:
+        from camdyn.io.netcdf import save_netcdf
+        files.append(announce(save_netcdf(branches_dataset(problem, records, bifurcations), out), json_))
+    if plot is not None:
+        from camdyn.plotting.branches import plot_branches
+        diagram = _brute_force(source, set_, parameter, first, last, brute_force, quiet or json_)
+        files.append(announce(plot_branches(branches_dataset(problem, records, bifurcations), plot, diagram),
+                              json_))
+    if json_:
+        summary = {"parameter": parameter, "units": unit, "points": len(branch.orbits),
+                   "stable_points": sum(o.stable for o in branch.orbits), "bifurcation_count": len(bifurcations),
+                   "stopped": branch.stopped, "branch_count": len(branches)}
+        emit_json("continue", summary, branches=records, bifurcations=bifurcations, files=files)
+        return
+    stable = sum(o.stable for o in branch.orbits)
+    console.print(f"{len(branch.orbits)} orbits of period {period} over {parameter} = {branch.orbits[0].parameter:.6g}"
+                  f" to {branch.orbits[-1].parameter:.6g} {unit}, {stable} stable; {branch.stopped}",
+                  highlight=False, soft_wrap=True)
+    for extra in branches[1:]:
+        console.print(f"{len(extra.orbits)} orbits of period {extra.orbits[0].periods} from {parameter} = "
+                      f"{extra.orbits[0].parameter:.9g} {unit}; {extra.stopped}", highlight=False, soft_wrap=True)
+    for item in bifurcations:
+        console.print(f"  {item['kind']} at {parameter} = {item['parameter']:.9g} {unit} (branch {item['branch']})",
+                      highlight=False, soft_wrap=True)
+
+
+def _brute_force(source, set_, parameter, first, last, count, quiet):
+    """The brute-force bifurcation diagram over ``count`` values of the parameter (a
+    sweep with the Poincare metric, as ``camdyn bifurcation``), or None if ``count`` is 0."""
+    if not count:
+        return None
+    import tempfile
+
+    import numpy as np
+
+    from camdyn.params.config import parse_assignments
+    from camdyn.sweeps import run_sweep, spec_from_dict
+
+    with tempfile.TemporaryDirectory() as folder:
+        table = {"system": {"source": source, "set": parse_assignments(set_)},
+                 "vary": [{"key": parameter, "values": [float(v) for v in np.linspace(first, last, count)]}],
+                 "run": {"revolutions": 300, "discard": 200}, "metrics": {"names": ["poincare"]},
+                 "output": {"path": str(Path(folder) / "diagram.nc")}}
+        result = run_sweep(spec_from_dict(table, name="diagram"), progress=not quiet)
+        diagram = result.load()
+        result.close()
+    return diagram
+
+
+def _load(source, set_, parameter, brute_force):
+    """``(system, unit, mechanism)``: the cam-follower, or a mechanism's rig
+    (``mechanism`` True), and the continued parameter's unit."""
+    from camdyn.continuation.problem import parameter_unit
+    from camdyn.params.mechanism import is_mechanism
+
+    if not is_mechanism(source):
+        system = load_source(source, set_)
+        return system, parameter_unit(system, parameter), False
+    from camdyn.io.mechanism_config import load_mechanism, mechanism_rig
+    from camdyn.params.config import parse_assignments
+
+    if brute_force:
+        raise ParameterError("--brute-force sweeps the cam-follower; it is not offered for a mechanism")
+    rig = mechanism_rig(load_mechanism(source, parse_assignments(set_)))
+    return rig, _mechanism_unit(rig, parameter), True
+
+
+def _mechanism_unit(rig, parameter: str) -> str:
+    """The unit of a mechanism's continued parameter (a bearing key or the system's)."""
+    from camdyn.continuation.mechanisms import BEARING_KEYS
+    from camdyn.continuation.problem import parameter_unit
+    from camdyn.simulation.flexible_pivot import FlexiblePivotRig
+
+    if parameter in BEARING_KEYS:
+        if not isinstance(rig, FlexiblePivotRig):
+            raise ParameterError(f"{parameter} is a key of the flexible pivot only")
+        return BEARING_KEYS[parameter]
+    return parameter_unit(rig.system, parameter)
+
+
+def _trace(system, parameter, first, last, period, step, max_points, transient, quiet, segments, mechanism=False):
+    """The branch, with a progress bar over the parameter range unless ``quiet``
+    (``system`` a mechanism's rig when ``mechanism``)."""
+    from camdyn.continuation.mechanisms import trace_mechanism
+    from camdyn.continuation.results import trace_branch
+
+    trace = trace_mechanism if mechanism else trace_branch     # the same signature
+    if quiet:
+        return trace(system, parameter, first, last, period, step, max_points, transient, segments=segments)
+    from rich.progress import Progress
+
+    with Progress(console=err_console, transient=True) as bar:
+        task = bar.add_task(f"continuing in {parameter}", total=1.0)
+
+        def progress(orbit):
+            bar.update(task, completed=min(max((orbit.parameter - first) / (last - first), 0.0), 1.0))
+        return trace(system, parameter, first, last, period, step, max_points, transient, progress=progress,
+                     segments=segments)
