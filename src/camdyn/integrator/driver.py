@@ -75,7 +75,7 @@ from camdyn.integrator.events import (
 )
 from camdyn.integrator.inlining import InlinedPipeline
 from camdyn.integrator.interrupt import POLL_STEPS, interrupted
-from camdyn.integrator.nordsieck import ROWS, TIME, adams_accept, adams_step
+from camdyn.integrator.nordsieck import ROWS, TIME, adams_accept, adams_ready, adams_start, adams_step
 from camdyn.integrator.sampling import sample
 from camdyn.integrator.steppers import (
     KIND_DOP853,
@@ -95,8 +95,8 @@ __all__ = [
     "COUNT_ROSENBROCK", "COUNT_EVENTS", "COUNT_ROOT_ITERATIONS", "COUNT_STATUS", "COUNT_EVENTS_DROPPED",
     "COUNT_SIZE", "COUNTER_NAMES", "STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW",
     "STATUS_NOT_FINITE", "STATUS_ZENO", "STATUS_INTERRUPTED", "STATUS_MESSAGES", "METHOD_AUTO", "METHOD_EXPLICIT",
-    "METHOD_ROSENBROCK", "METHOD_DOP853", "METHOD_ADAMS", "EVENT_TIME", "EVENT_GUARD", "EVENT_NEW_SIGN", "EVENT_MONITOR",
-    "EVENT_GUARDS", "EVENT_RETRY_ABOVE", "EVENT_RETRY_BELOW", "EVENT_RETRY_LOST", "EVENT_RETRY_MARGIN",
+    "METHOD_ROSENBROCK", "METHOD_DOP853", "METHOD_ADAMS", "EVENT_TIME", "EVENT_GUARD", "EVENT_NEW_SIGN",
+    "EVENT_MONITOR", "EVENT_GUARDS", "EVENT_RETRY_ABOVE", "EVENT_RETRY_BELOW", "EVENT_RETRY_LOST", "EVENT_RETRY_MARGIN",
     "EVENT_STEP_FLOOR", "event_columns",
 ]
 
@@ -104,7 +104,7 @@ METHOD_AUTO = 0  # the system chooses (systems.preferred_method)
 METHOD_EXPLICIT = 1  # Dormand-Prince 5(4)
 METHOD_ROSENBROCK = 2  # RODAS4
 METHOD_DOP853 = 3  # DOP853
-METHOD_ADAMS = 4  # variable-order Adams-Moulton, Nordsieck form, Newton corrector
+METHOD_ADAMS = 4  # variable-order Adams-Moulton, Nordsieck form, functional iteration
 
 STEP_ACCEPTED = 0  # verdicts on a trial step
 STEP_RETRY = 1
@@ -136,7 +136,7 @@ def _allocate(system, y_start, n_out, max_events):
 
 @numba.njit(cache=True, inline="always")
 def _workspace(n, m):
-    """Scratch arrays of one run: stepper stages, the Rosenbrock (or Adams-Newton)
+    """Scratch arrays of one run: stepper stages, the Rosenbrock
     iteration matrix and its pivots, the Adams history, states [n] and guard values [m]."""
     history = np.zeros((ROWS, n))
     history[TIME, 0] = np.nan   # no history yet: the first Adams step starts at order 1
@@ -213,6 +213,8 @@ def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, m
         Scaled error norm (at most 1 to accept).
     """
     chosen = systems.preferred_method(system, mode, p) if method == 0 else method
+    if chosen == METHOD_ADAMS and not adams_ready(history, t, y):
+        chosen = METHOD_DOP853   # a step that (re)starts the Adams history: _adams_start
     if chosen == METHOD_ROSENBROCK:
         kind = KIND_HERMITE
         counters[COUNT_RHS] += rosenbrock_step(system, t, y, f, h, mode, p, work, stages, matrix, pivots, y1, err)
@@ -221,8 +223,7 @@ def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, m
         e = error_norm(y, y1, err, rtol, atol, systems.controlled_size(system))
     elif chosen == METHOD_ADAMS:
         kind = KIND_NORDSIECK
-        e, order, calls = adams_step(system, t, y, f, h, mode, p, history, matrix, pivots, y1, f1, err, rtol, atol,
-                                     counters)
+        e, order, calls = adams_step(system, t, y, f, h, mode, p, history, y1, f1, err, rtol, atol)
         counters[COUNT_RHS] += calls
     elif chosen == METHOD_DOP853:
         kind = KIND_DOP853
@@ -318,6 +319,18 @@ def _advance(system, t, h, t_stop, e, order, y, f, y1, f1, dwork, kind, mode, p,
     factor = 0.9 * e ** (-1.0 / order) if e > 0.0 else 5.0
     h *= min(5.0, max(0.2, factor))
     return t, i_out, monitor_max, h
+
+
+@numba.njit(cache=True, inline="always")
+def _adams_start(system, method, kind, ready, t, h, y, y1, f1, mode, p, k16, ytmp, f7, history, rtol, atol, err,
+                 counters):
+    """After a DOP853 step that the Adams method took to (re)start, its history at the
+    step's end from the step's continuous extension. Returns whether the extension is
+    ready and the first Adams step [s] (``h`` otherwise)."""
+    if method != METHOD_ADAMS or kind != KIND_DOP853:
+        return ready, h
+    ready = ensure_extension(ready, system, t, y, h, y1, f1, mode, p, k16, ytmp, f7, counters)
+    return ready, adams_start(history, f7, y1, t + h, h, rtol, atol, systems.controlled_size(system), err)
 
 
 @numba.njit(cache=True, inline="always")
@@ -423,8 +436,12 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             t = t_new
             monitor_max, h = restart(system, t, h, tau_event, y, f, g, gr, mode, p, h_regime, counters)
         elif k_event < 0:
+            ready, h_adams = _adams_start(system, method, kind, ready, t, h, y, y1, f1, mode, p, k16, ytmp, f7,
+                                          history, rtol, atol, err, counters)
             t, i_out, monitor_max, h = _advance(system, t, h, t_end if last else t + h, e, order, y, f, y1, f1,
                                                 dwork, kind, mode, p, k16, ytmp, f7, yo, g, gr, g1, gr1, t_out, i_out,
                                                 y_out, mode_out, monitor_max, h_regime, ready, counters)
+            if method == METHOD_ADAMS and kind == KIND_DOP853:
+                h = h_adams
     i_out = _fill_end(t, y, mode, t_out, i_out, y_out, mode_out, counters)
     return y_out, mode_out, events[:n_events].copy(), counters
