@@ -99,16 +99,24 @@ def timing(case, rounds=3):
         best, rows = {}, {}
         for _ in range(rounds):
             for name, run in runners.items():
+                if name in rows and "failure" in rows[name]:
+                    continue
                 start = time.perf_counter()
-                alpha, counters = run(case, rtol)
+                try:
+                    alpha, counters = run(case, rtol)
+                except RuntimeError as exc:
+                    rows[name] = {"rtol": rtol, "failure": str(exc)}
+                    continue
                 elapsed = time.perf_counter() - start
                 best[name] = min(best.get(name, np.inf), elapsed)
                 rows[name] = {"rtol": rtol, "error": case.error(alpha),
                               **{k: v / case.revolutions for k, v in counters.items()}}
         for name, row in rows.items():
-            row["ms_per_rev"] = 1e3 * best[name] / case.revolutions
+            if name in best:
+                row["ms_per_rev"] = 1e3 * best[name] / case.revolutions
             curves[name].append(row)
         print(f"  rtol {rtol:.0e}: " + ", ".join(f"{n}: {r['ms_per_rev']:.3g} ms/rev err {r['error']:.1e}"
+                                               if "ms_per_rev" in r else f"{n}: {r['failure']}"
                                                for n, r in rows.items()), flush=True)
     return curves
 

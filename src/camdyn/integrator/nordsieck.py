@@ -52,8 +52,10 @@ THRESHOLD = 1.5
 GROWTH_LOW, GROWTH = 10.0, 2.0
 #: Order of a history started from a DOP853 step [-].
 START_ORDER = 5
-#: Refusals of one step after which the order drops [-].
-FAILS_TO_DROP = 3
+#: Refusals of one step after which the history is dropped and the driver starts it
+#: again from a DOP853 step [-] (near a contact's separation the Hertz force's
+#: ``delta^1.5`` has unbounded derivatives, which no history of high order follows).
+FAILS_TO_RESTART = 2
 
 Z = 0
 Z_NEW = MAX_ORDER + 2
@@ -212,17 +214,19 @@ def _eta(hist, q, h, e_norm, y1, rtol, atol, controlled, work):
 @numba.njit(cache=True, inline="always")
 def _refuse(hist, q, e_norm, y1, rtol, atol, controlled, work):
     """After a refused step of error norm ``e_norm``: drop the order when order ``q - 1``
-    allows the longer retry (LSODE's rule, Hindmarsh 1983) or after :data:`FAILS_TO_DROP`
-    refusals in a row. Returns the error norm the driver sizes the retry from (its
+    allows the longer retry (LSODE's rule, Hindmarsh 1983); drop the history after
+    :data:`FAILS_TO_RESTART` refusals in a row. Returns the error norm the driver sizes the retry from (its
     ``h * 0.9 e^(-1/(q+1))`` then is the step this choice allows, at most 0.9 h)."""
     n = y1.shape[0]
     hist[FAILS, 0] += 1.0
+    if hist[FAILS, 0] >= FAILS_TO_RESTART:
+        hist[TIME, 0] = np.nan
     eta = 1.0 / ((6.0 * e_norm) ** (1.0 / (q + 1)) + 1e-6)
     if q > 1:
         for i in range(n):
             work[i] = ERROR_CONSTANT[q - 1] * FACTORIAL[q] * hist[Z_NEW + q, i]
         down = 1.0 / ((6.0 * _norm(work, y1, rtol, atol, controlled)) ** (1.0 / q) + 1e-6)
-        if down > eta or hist[FAILS, 0] >= FAILS_TO_DROP:
+        if down > eta:
             eta = down
             hist[ORDER, 0] = q - 1.0
             hist[WAIT, 0] = q
@@ -252,6 +256,8 @@ def adams_step(system, t, y, f, h, mode, p, hist, y1, f1, work, rtol, atol):
     converged, calls = _correct(system, t, h, q, mode, p, hist, y1, f1, work, rtol, atol, controlled)
     if not converged:
         hist[FAILS, 0] += 1.0
+        if hist[FAILS, 0] >= FAILS_TO_RESTART:
+            hist[TIME, 0] = np.nan
         return 1e3, q + 1.0, calls
     for j in range(q + 1):
         for i in range(n):
