@@ -18,8 +18,10 @@ against its cached SciPy DOP853 truth at rtol 1e-13):
 Run with the peers' environment (numbalsoda)::
 
     PYTHONPATH=src:benchmarks .venv-peers/bin/python benchmarks/bench_adams.py [counts] [timing]
+    PYTHONPATH=src:benchmarks .venv-peers/bin/python benchmarks/bench_adams.py summary
 
-Writes benchmarks/adams.json (the parts run) and prints the tables.
+Writes benchmarks/adams.json (the parts run) and prints the tables (``summary``: the
+tables of the stored JSON only).
 """
 
 from __future__ import annotations
@@ -121,8 +123,46 @@ def timing(case, rounds=3):
     return curves
 
 
+def at_error(rows, target, key):
+    """``key`` per revolution at the error ``target`` [-], interpolated in log-log on the error
+    envelope as bench_peers.time_at does for the time (None if never reached)."""
+    usable = [dict(r, ms_per_rev=r[key]) for r in rows if key in r and "error" in r]
+    return time_at(usable, target)
+
+
+def summary(results):
+    """Markdown tables of the parts in ``results``: calls and times at the error targets."""
+    lines = []
+    text = lambda v: "not reached" if v is None else f"{v:.3g}"
+    for label, entry in results.items():
+        if label == "settings":
+            continue
+        if "counts" in entry:
+            lines += [f"{label}: right-hand-side calls per revolution at equal error (SciPy ode, numba rhs, no events)",
+                      "", "| solver | " + " | ".join(f"rhs/rev at {t:.0e}" for t in TARGETS) + " |",
+                      "|---|" + "---|" * len(TARGETS)]
+            for name, rows in entry["counts"].items():
+                cells = (text(at_error(rows, t, "rhs_per_rev")) for t in TARGETS)
+                lines.append(f"| {name} | " + " | ".join(cells) + " |")
+            lines.append("")
+        if "timing" in entry:
+            lines += [f"{label}: ms per revolution and calls per revolution at equal error (interleaved, best of 3)",
+                      "", "| tool | " + " | ".join(f"ms/rev at {t:.0e} | rhs/rev at {t:.0e}" for t in TARGETS) + " |",
+                      "|---|" + "---|" * (2 * len(TARGETS))]
+            for name, rows in entry["timing"].items():
+                cells = []
+                for t in TARGETS:
+                    cells += [text(at_error(rows, t, "ms_per_rev")), text(at_error(rows, t, "rhs_calls"))]
+                lines.append(f"| {name} | " + " | ".join(cells) + " |")
+            lines.append("")
+    return "\n".join(lines)
+
+
 def main():
     parts = sys.argv[1:] or ["counts", "timing"]
+    if parts == ["summary"]:
+        print(summary(json.loads((HERE / "adams.json").read_text())))
+        return
     path = HERE / "adams.json"
     results = json.loads(path.read_text()) if path.exists() else {}
     results["settings"] = {"revolutions": REVOLUTIONS, "count_rtols": COUNT_RTOLS, "timing_rtols": RTOLS}
@@ -141,6 +181,7 @@ def main():
                 print(f"  at error {target:.0e}: " + ", ".join(
                     f"{n}: {time_at(rows, target) or float('nan'):.3g} ms/rev" for n, rows in entry["timing"].items()))
     path.write_text(json.dumps(results, indent=1) + "\n")
+    print(summary(results))
 
 
 if __name__ == "__main__":
