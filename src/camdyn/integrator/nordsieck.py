@@ -96,6 +96,8 @@ def _adams_tables():
 
 EL, ERROR_CONSTANT = _adams_tables()
 FACTORIAL = np.array([math.factorial(q) for q in range(MAX_ORDER + 2)], dtype=np.float64)
+#: ``6 e`` at and above which order ``q``'s step would grow by less than THRESHOLD [-].
+KEEP = np.array([(1.0 / THRESHOLD - 1e-6) ** (q + 1) for q in range(MAX_ORDER + 2)])
 
 
 @numba.njit(cache=True, inline="always")
@@ -158,7 +160,7 @@ def _correct(system, t, h, q, mode, p, hist, y1, f1, work, rtol, atol, controlle
     rate = 1.0
     previous = 0.0
     for iteration in range(ITERATIONS):
-        systems.rhs(system, t + h, y1, mode, p, f1)
+        systems.rhs_inline(system, t + h, y1, mode, p, f1)
         for i in range(n):
             e_new = h * f1[i] - hist[Z_NEW + 1, i]
             work[i] = e_new - hist[E, i]
@@ -181,6 +183,12 @@ def _eta(hist, q, h, e_norm, y1, rtol, atol, controlled, work):
     error norm ``e_norm`` (CVODE's choice among orders ``q - 1``, ``q``, ``q + 1``)."""
     n = y1.shape[0]
     wait = hist[WAIT, 0] - 1.0
+    if wait > 0.0 and (hist[FAILS, 0] > 0.0 or 6.0 * e_norm >= KEEP[q]):
+        if wait == 1.0:   # the step stays: no power to take
+            for i in range(n):
+                hist[E_LAST, i] = hist[E, i]
+            hist[SAVED_STEP, 0] = h
+        return 1.0, q, wait
     eta = 1.0 / ((6.0 * e_norm) ** (1.0 / (q + 1)) + 1e-6)
     new_q = q
     if wait <= 0.0 and hist[FAILS, 0] > 0.0:
