@@ -3,9 +3,12 @@
 Algorithm (per accepted step from ``t`` to ``t + h``):
 
 1. step with DOP853, Dormand-Prince 5(4) or the Rosenbrock method RODAS4 (chosen per mode by
-   the system, or forced), accept if the scaled error norm is at most 1;
+   the system, or forced), or with the Adams method of :mod:`camdyn.integrator.nordsieck`
+   when forced (``METHOD_ADAMS``; its history is started from a DOP853 step after every
+   event); accept if the scaled error norm is at most 1;
 2. build the step's continuous extension (Dormand-Prince's own 4th-order dense output,
-   or the cubic Hermite interpolant after a Rosenbrock step);
+   the cubic Hermite interpolant after a Rosenbrock step, the Nordsieck polynomial after
+   an Adams step);
 3. for every guard active in the current mode, look for a sign change against its
    expected sign at the step end and at the extrema of the guard's own cubic (from its
    exact rates at both ends, which the system computes from the acceleration; this
