@@ -111,6 +111,47 @@ def _segment(system, first: float, last: float, periods: int = 1, levels: int = 
                                  for b in doubled]}
 
 
+def _window(system, speed: float, periods: int, down: float, up: float, step: float = 5e-4, max_step: float = 2e-3,
+            max_points: int = 60, levels: int = 0, downwards: dict | None = None) -> dict:
+    """A window's period-``periods`` branch: the orbit at ``speed`` [Hz] from a
+    400-revolution plain run from rest (the brute-force diagram's state), continued down
+    to ``down`` and up to ``up`` [Hz] (by default in short steps, scaled units; the
+    settings ``downwards`` replace them downwards), with its doublings switched onto down
+    to ``levels``; points, ends, bifurcations and CPU time [s]."""
+    from camdyn.continuation.orbits import transient_state
+    from camdyn.continuation.results import switch_doublings
+    t, c = time.perf_counter(), time.process_time()
+    problem = system_problem(system.with_values(**{"motion.speed": speed}), "motion.speed")
+    orbit = find_orbit(problem, start=transient_state(problem, 400), periods=periods)
+    upwards = {"step": step, "max_step": max_step, "max_points": max_points}
+    branches = [continue_orbits(problem, orbit, down, **{**upwards, **(downwards or {})}),
+                continue_orbits(problem, orbit, up, **upwards)]
+    branches += switch_doublings(problem, branches[1], up, levels=levels, step=step, max_points=max_points)
+    return {"speed_hz": speed, "periods": periods, "wall_s": time.perf_counter() - t, "cpu_s": time.process_time() - c,
+            "branches": [{"points": len(b.orbits), "periods": b.orbits[-1].periods,
+                          "from_hz": min(o.parameter for o in b.orbits), "to_hz": max(o.parameter for o in b.orbits),
+                          "stopped": b.stopped, "bifurcations": [(x.kind, x.parameter) for x in b.bifurcations]}
+                         for b in branches]}
+
+
+#: The other windows of the brute-force diagram (speed [Hz], period, down to, up to, and
+#: settings): 7.29 Hz (3 impacts per revolution), 9.2 Hz (period 2), 9.55 Hz (period 3),
+#: 20.0 Hz (period 2), 20.7 Hz (period 4), 29.0 Hz (period 3 and its period-6 branch),
+#: then the narrowest: period 3 at 8.9 Hz, 5 at 9.0 Hz, 2 at 19.1 Hz, 8 at 19.3 Hz, 2 at
+#: 19.4 Hz, 4 at 19.6 Hz and 6 at 19.7 Hz.
+WIDE = {"step": 0.02, "max_step": 0.1, "max_points": 200}
+WINDOWS = [(7.28, 1, 7.25, 7.32, {"step": 0.002, "max_step": 0.01, "max_points": 200, "levels": 1}),
+           (9.2, 2, 9.0, 9.45, {**WIDE, "levels": 1}),
+           (9.55, 3, 9.45, 9.7, {**WIDE, "max_points": 100}),
+           (20.0, 2, 19.7, 20.5, {**WIDE, "levels": 1}),
+           (20.7, 4, 20.4, 20.9, WIDE),
+           (29.0, 3, 28.8, 29.3, {**WIDE, "levels": 1}),
+           (8.9, 3, 8.8, 8.92, {"downwards": {"step": 0.02, "max_step": 0.1, "max_points": 12}}),
+           (9.0, 5, 8.9, 9.1, {}),
+           (19.1, 2, 19.0, 19.2, {}), (19.3, 8, 19.2, 19.302, {}), (19.4, 2, 19.3, 19.5, {}),
+           (19.6, 4, 19.5, 19.7, {"max_step": 0.005}), (19.7, 6, 19.6, 19.8, {})]
+
+
 def chapter3(skip_sweep: bool) -> dict:
     import resource
 
@@ -120,8 +161,10 @@ def chapter3(skip_sweep: bool) -> dict:
     out = {"segments": [_segment(system, 5.0, 30.0), _segment(system, 8.2, 7.85), _segment(system, 8.2, 8.5),
                         _segment(system, 14.0, 9.5), _segment(system, 14.0, 17.45, levels=2),
                         _segment(system, 24.0, 20.9, periods=2), _segment(system, 24.0, 28.6, periods=2)]}
-    out["total_wall_s"] = sum(item["wall_s"] for item in out["segments"])
-    out["total_cpu_s"] = sum(item["cpu_s"] for item in out["segments"])
+    out["windows"] = [_window(system, speed, periods, down, up, **settings)
+                      for speed, periods, down, up, settings in WINDOWS]
+    out["total_wall_s"] = sum(item["wall_s"] for item in out["segments"] + out["windows"])
+    out["total_cpu_s"] = sum(item["cpu_s"] for item in out["segments"] + out["windows"])
     if not skip_sweep:
         from camdyn.sweeps import run_sweep, spec_from_dict
         with tempfile.TemporaryDirectory() as folder:
@@ -143,10 +186,11 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--repeat", type=int, default=7)
     parser.add_argument("--skip-sweep", action="store_true")
+    parser.add_argument("--out", default=str(HERE / "continuation.json"))
     args = parser.parse_args()
     result = {"machine": platform.machine(), "python": platform.python_version(), "camdyn": camdyn.__version__,
               "one_orbit": one_orbit(args.repeat), "chapter3_5_to_30_Hz": chapter3(args.skip_sweep)}
-    (HERE / "continuation.json").write_text(json.dumps(result, indent=1) + "\n")
+    Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
     print(json.dumps(result, indent=1))
 
 

@@ -67,7 +67,7 @@ class Dop853Step:
 
     def estimate(self):
         """The step's error estimate, unscaled (atol = 1, rtol = 0): an rms like true_error."""
-        return dop853_error_norm(Y0, self.y1, self.err5, self.err3, self.h, 0.0, 1.0, 2)
+        return dop853_error_norm(Y0, self.y1, self.err5, self.err3, self.h, 0.0, 1.0, 2, False)
 
     def dense(self, tau):
         out = np.empty(3)
@@ -242,10 +242,14 @@ def test_dop853_error_norm_of_an_exact_step_with_an_underflowing_third_order_est
     err3 = np.array([1e-173, 0.0])
     e3 = (err3[0] / 1e-12) ** 2
     assert e3 > 0.0 and 0.01 * e3 == 0.0    # the underflow the norm meets
-    assert dop853_error_norm(y, y, err5, err3, 1e-3, 0.0, 1e-12, 2) == 0.0
+    assert dop853_error_norm(y, y, err5, err3, 1e-3, 0.0, 1e-12, 2, False) == 0.0
+    assert dop853_error_norm(y, y, err5, err3, 1e-3, 0.0, 1e-12, 2, True) == 0.0
     # a nonzero fifth-order estimate still gives Hairer's norm, |h| e5 / sqrt((e5 + 0.01 e3) n)
     err5 = np.array([2e-15, 1e-15])
     err3 = np.array([4e-14, 0.0])
     e5, e3 = (2e-6) ** 2 + (1e-6) ** 2, (4e-5) ** 2     # (err / atol) squared, summed
     expected = 1e-3 * e5 / np.sqrt((e5 + 0.01 * e3) * 2)
-    assert dop853_error_norm(y, y, err5, err3, 1e-3, 0.0, 1e-9, 2) == pytest.approx(expected, rel=1e-12)
+    assert dop853_error_norm(y, y, err5, err3, 1e-3, 0.0, 1e-9, 2, False) == pytest.approx(expected, rel=1e-12)
+    # the plain norm is the fifth-order estimate's rms, |h| sqrt(e5 / n), never below Hairer's
+    plain = dop853_error_norm(y, y, err5, err3, 1e-3, 0.0, 1e-9, 2, True)
+    assert plain == pytest.approx(1e-3 * np.sqrt(e5 / 2), rel=1e-12) and plain >= expected

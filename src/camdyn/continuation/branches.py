@@ -41,6 +41,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from camdyn.continuation import multiple
+from camdyn.continuation.ends import END_FRACTION, contact_loss_end, grazing_end
 from camdyn.continuation.orbits import (
     SAMPLES_PER_PERIOD,
     Flow,
@@ -73,6 +74,19 @@ JUMP_TOLERANCE = 0.1
 #: sharply, a point up to one step length away is legitimate (with 1.0 the chapter 3
 #: rig's one-impact branch stopped at its grazing, 9.5593 Hz, unreported).
 JUMP_DISTANCE = 2.0
+#: A corrector that converges in this many iterations or fewer grows the next step by 1.5.
+FAST_CORRECTIONS = 4
+#: Two new points in a row, each within this fraction of the last step from the point
+#: before the last, end the branch: the tangent's orientation flips at every point and
+#: the continuation steps to and fro over its own points (on the chapter 3 rig the
+#: period-4 branch from 20.7 Hz alternated between 20.41412 and 20.41513 Hz for 200
+#: points near the branch point where it meets the period-2 orbit). One step back alone
+#: does not end it: the period-2 branch from 9.2 Hz takes one next to its grazing near
+#: 9.013 Hz and goes on until its step falls below the minimum [-].
+RETRACE = 0.1
+#: Most iterations of the corrector's fallback, Newton's method with the Jacobian renewed
+#: at every iterate (a variational run each).
+NEWTON_CORRECTIONS = 15
 
 __all__ = ["Bifurcation", "Branch", "continue_orbits", "continuation_scales", "KINDS"]
 
@@ -143,6 +157,7 @@ class _Continuation:
         self.segments = segments
         self.u = problem.unknowns * segments
         self.orientation = 0.0      # sign of det([J; t]) along the branch, set at its first point
+        self.retraced = 0           # consecutive points that stepped back onto the point before the last
 
     def unscale(self, z: np.ndarray) -> tuple[np.ndarray, float]:
         u = z * self.scales
@@ -235,7 +250,8 @@ class _Continuation:
         """Chord iterations with ``jac``, or Newton's with a renewed Jacobian if None."""
         z = guess.copy()
         last = math.inf
-        for iteration in range(1, self.max_corrections + 1):
+        limit = self.max_corrections if jac is not None else min(self.max_corrections, NEWTON_CORRECTIONS)
+        for iteration in range(1, limit + 1):
             if jac is None:
                 _, fresh, _ = self.linearization(z)
                 residual = self.residual(z)
@@ -331,38 +347,32 @@ def _detect(job: _Continuation, a: _Point, b: _Point) -> list[Bifurcation]:
     return sorted(found, key=lambda item: float(a.tangent @ (job.pack(item.orbit) / job.scales)))
 
 
-def _grazing_end(orbits: list[Orbit]) -> list[Bifurcation]:
-    """A branch that ends because its orbit touches the contact guard (the smallest guard
-    value has fallen to a thousandth of its largest along the branch): a grazing
-    bifurcation at the parameter where the secant through the last two points' smallest
-    guard values reaches zero. Past it the orbit gains an impact whose monodromy grows as
-    the inverse of the impact velocity (Di Bernardo et al. 2008, sec. 8.2), so the branch
-    cannot be continued through it."""
-    if len(orbits) < 2:
-        return []
-    a, b = orbits[-2], orbits[-1]
-    largest = max(abs(o.guard_minimum) for o in orbits)
-    if not (0 <= b.guard_minimum < 1e-3 * largest and a.guard_minimum > b.guard_minimum):
-        return []
-    slope = (b.guard_minimum - a.guard_minimum) / (b.parameter - a.parameter)
-    return [Bifurcation("grazing", b.parameter - b.guard_minimum / slope, b)]
+def _half_distance(job: _Continuation, orbit: Orbit) -> float:
+    """Scaled distance between a period-``2k`` orbit's state and its state after ``k``
+    forcing periods: it falls to zero where the branch meets the period-``k`` orbit at
+    that orbit's period doubling, a branch point of the period-``2k`` problem (there
+    ``M^2 - I`` of the period-``k`` orbit is singular), where the continuation would creep
+    (on the chapter 3 rig the period-4 branch from 20.7 Hz spent 200 of its 300 points
+    within 1e-6 Hz of the period-2 branch's doubling at 20.41352 Hz)."""
+    half = shoot(job.problem, orbit.state, orbit.parameter, orbit.periods // 2)
+    return float(np.linalg.norm((half - orbit.state) / job.scales[:-1]))
 
 
-def _contact_loss_end(orbits: list[Orbit]) -> list[Bifurcation]:
-    """A cam-follower branch that ends (the corrector fails) just before its smallest
-    normal force reaches zero: a contact loss at the zero of the secant through the last
-    two points' ``min Fn``, if it lies within the last step beyond the end. (Where the
-    orbit must jump to an impacting motion as the contact opens, as on the chapter 3 rig,
-    no corrected point exists past it.)"""
-    if len(orbits) < 2:
-        return []
-    a, b = orbits[-2], orbits[-1]
-    if not (math.isfinite(a.force_minimum) and a.force_minimum > b.force_minimum > 0):
-        return []
-    zero = b.parameter - b.force_minimum * (b.parameter - a.parameter) / (b.force_minimum - a.force_minimum)
-    if abs(zero - b.parameter) > abs(b.parameter - a.parameter):
-        return []
-    return [Bifurcation("contact-loss", zero, b)]
+def _ended(job: _Continuation, new: _Point, last: _Point, before: np.ndarray | None, halves: list | None) -> str:
+    """Why the branch ends at its new point ``new`` (after ``last``, itself after the
+    scaled point ``before``), or an empty string: it steps back onto its own points
+    (:data:`RETRACE`), or a period-``2k`` branch meets its period-``k`` orbit
+    (:func:`_half_distance`, appended to ``halves``)."""
+    where = f"{job.problem.name} = {new.orbit.parameter:.9g}"
+    back = before is not None and np.linalg.norm(new.z - before) < RETRACE * np.linalg.norm(last.z - before)
+    job.retraced = job.retraced + 1 if back else 0
+    if job.retraced >= 2:
+        return f"the continuation stepped to and fro over its own points at {where}"
+    if halves is not None:
+        halves.append(_half_distance(job, new.orbit))
+        if halves[-1] < END_FRACTION * max(halves):
+            return f"the branch reached the period-{new.orbit.periods // 2} orbit (its period doubling) at {where}"
+    return ""
 
 
 def continuation_scales(orbit: Orbit) -> np.ndarray:
@@ -433,6 +443,8 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
     if progress:
         progress(start)
     ds = step
+    before = None                                              # the point before the last
+    halves = [_half_distance(job, start)] if start.periods % 2 == 0 and segments == 1 else None
     while len(branch.orbits) < max_points:
         last_step = False
         target = point.z[-1] + ds * point.tangent[-1]
@@ -453,7 +465,8 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         except (SimulationError, ParameterError):
             ds *= 0.5
             if ds < min_step:
-                branch.bifurcations.extend(_contact_loss_end(branch.orbits) + _grazing_end(branch.orbits))
+                branch.bifurcations.extend(Bifurcation(*end) for end in contact_loss_end(branch.orbits)
+                                           + grazing_end(branch.orbits))
                 return Branch(branch.orbits, branch.bifurcations,
                               f"the step fell below {min_step:g} at {problem.name} = {point.orbit.parameter:.9g}")
             continue
@@ -461,9 +474,13 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         branch.orbits.append(new.orbit)
         if progress:
             progress(new.orbit)
-        point = new
+        ended = _ended(job, new, point, before, halves)
+        if ended:
+            return Branch(branch.orbits, branch.bifurcations, ended)
+        before, point = point.z, new
         value = new.orbit.parameter
         if last_step or not (lo - 1e-12 * scales[-1] <= value <= hi + 1e-12 * scales[-1]):
             return Branch(branch.orbits, branch.bifurcations, f"{problem.name} reached the end of its range")
-        ds = min(ds * 1.5, max_step) if new.iterations <= 4 else max(ds * 0.7, min_step) if new.iterations > 8 else ds
+        ds = (min(ds * 1.5, max_step) if new.iterations <= FAST_CORRECTIONS
+              else max(ds * 0.7, min_step) if new.iterations > 8 else ds)
     return Branch(branch.orbits, branch.bifurcations, f"{max_points} points computed")

@@ -233,7 +233,8 @@ def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, m
         counters[COUNT_RHS] += dop853_step(system, t, y, f, h, mode, p, k16, ytmp, y1, f1, err, err3,
                                             systems.controlled_size(system))
         order = 8.0
-        e = dop853_error_norm(y, y1, err, err3, h, rtol, atol, systems.controlled_size(system))
+        e = dop853_error_norm(y, y1, err, err3, h, rtol, atol, systems.controlled_size(system),
+                              systems.plain_error_estimate(system))
     else:
         kind = KIND_DP5
         counters[COUNT_RHS] += dormand_prince_step(system, t, y, f, h, mode, p, work, y1, f1, err)

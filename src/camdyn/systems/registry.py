@@ -34,7 +34,8 @@ __all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", 
            "DRIVEN_CAM", "FLEXIBLE_PIVOT", "TWO_FOLLOWERS", "SLIDING_FOLLOWER",
            "VARIATIONAL", "PARAMETRIC", "state_size", "controlled_size",
            "guard_count", "mode_size", "rhs", "rhs_inline", "jacobian", "guards",
-           "expected_sign", "transition", "initial_mode", "regime", "preferred_method", "monitor"]
+           "expected_sign", "transition", "initial_mode", "regime", "preferred_method",
+           "plain_error_estimate", "monitor"]
 
 
 @numba.njit(cache=True)
@@ -145,6 +146,16 @@ def regime(system, mode, p):
     """Index (0 or 1) of the dynamic regime of a mode (the driver remembers the last step
     of each)."""
     return models.regime(_model(system), mode, p)
+
+
+@numba.njit(cache=True)
+def plain_error_estimate(system):
+    """Whether DOP853 steps of this system are controlled by their 5th-order error
+    estimate alone, not Hairer's combination with the 3rd-order one: the cam-follower,
+    whose Hertz force has a branch point at separation, near which the combination
+    accepted a step with the 5th-order estimate at 41 times the tolerance
+    (docs/integrator.md, *Accuracy in sustained contact*); not its variational system."""
+    return system == CAM_FOLLOWER
 
 
 @numba.njit(cache=True)

@@ -1,0 +1,55 @@
+"""The ends of a branch of periodic orbits where the corrector fails next to a loss of
+contact or a grazing: the bifurcation placed at the zero of the secant through the last
+two points' contact margin (the smallest normal force, the smallest guard value), as
+``(kind, parameter, orbit)``."""
+
+from __future__ import annotations
+
+import math
+
+from camdyn.continuation.orbits import Orbit
+
+__all__ = ["END_FRACTION", "contact_loss_end", "grazing_end"]
+
+#: A branch that ends with its last orbit's contact margin (the smallest guard value, the
+#: smallest normal force) below this fraction of the margin's largest along the branch
+#: ends at that margin's zero [-].
+END_FRACTION = 1e-3
+
+
+def grazing_end(orbits: list[Orbit]) -> list[tuple[str, float, Orbit]]:
+    """A branch that ends because its orbit touches the contact guard (the smallest guard
+    value has fallen to a thousandth of its largest along the branch): a grazing
+    bifurcation at the parameter where the secant through the last two points' smallest
+    guard values reaches zero. Past it the orbit gains an impact whose monodromy grows as
+    the inverse of the impact velocity (Di Bernardo et al. 2008, sec. 8.2), so the branch
+    cannot be continued through it."""
+    if len(orbits) < 2:
+        return []
+    a, b = orbits[-2], orbits[-1]
+    largest = max(abs(o.guard_minimum) for o in orbits)
+    if not (0 <= b.guard_minimum < END_FRACTION * largest and a.guard_minimum > b.guard_minimum):
+        return []
+    slope = (b.guard_minimum - a.guard_minimum) / (b.parameter - a.parameter)
+    return [("grazing", b.parameter - b.guard_minimum / slope, b)]
+
+
+def contact_loss_end(orbits: list[Orbit]) -> list[tuple[str, float, Orbit]]:
+    """A cam-follower branch that ends (the corrector fails) just before its smallest
+    normal force reaches zero: a contact loss at the zero of the secant through the last
+    two points' ``min Fn``, if it lies within the last step beyond the end or the last
+    ``min Fn`` has fallen below ``END_FRACTION`` of its largest along the branch. (Where
+    the orbit must jump to an impacting motion as the contact opens, as on the chapter 3
+    rig, no corrected point exists past it, and the halved steps before the end can be
+    shorter than the distance left to the zero: from 5 Hz the last step was 9.1e-6 Hz,
+    the zero 1.6e-5 Hz beyond it, and the contact loss went unreported.)"""
+    if len(orbits) < 2:
+        return []
+    a, b = orbits[-2], orbits[-1]
+    if not (math.isfinite(a.force_minimum) and a.force_minimum > b.force_minimum > 0):
+        return []
+    zero = b.parameter - b.force_minimum * (b.parameter - a.parameter) / (b.force_minimum - a.force_minimum)
+    largest = max(o.force_minimum for o in orbits)
+    if abs(zero - b.parameter) > abs(b.parameter - a.parameter) and not b.force_minimum < END_FRACTION * largest:
+        return []
+    return [("contact-loss", zero, b)]
