@@ -3,9 +3,12 @@
 Algorithm (per accepted step from ``t`` to ``t + h``):
 
 1. step with DOP853, Dormand-Prince 5(4) or the Rosenbrock method RODAS4 (chosen per mode by
-   the system, or forced), accept if the scaled error norm is at most 1;
+   the system, or forced), or with the Adams method of :mod:`camdyn.integrator.nordsieck`
+   when forced (``METHOD_ADAMS``; its history is started from a DOP853 step after every
+   event); accept if the scaled error norm is at most 1;
 2. build the step's continuous extension (Dormand-Prince's own 4th-order dense output,
-   or the cubic Hermite interpolant after a Rosenbrock step);
+   the cubic Hermite interpolant after a Rosenbrock step, the Nordsieck polynomial after
+   an Adams step);
 3. for every guard active in the current mode, look for a sign change against its
    expected sign at the step end and at the extrema of the guard's own cubic (from its
    exact rates at both ends, which the system computes from the acceleration; this
@@ -75,11 +78,13 @@ from camdyn.integrator.events import (
 )
 from camdyn.integrator.inlining import InlinedPipeline
 from camdyn.integrator.interrupt import POLL_STEPS, interrupted
+from camdyn.integrator.nordsieck import ROWS, TIME, adams_accept, adams_ready, adams_start, adams_step
 from camdyn.integrator.sampling import sample
 from camdyn.integrator.steppers import (
     KIND_DOP853,
     KIND_DP5,
     KIND_HERMITE,
+    KIND_NORDSIECK,
     dop853_error_norm,
     dop853_step,
     dormand_prince_step,
@@ -93,8 +98,8 @@ __all__ = [
     "COUNT_ROSENBROCK", "COUNT_EVENTS", "COUNT_ROOT_ITERATIONS", "COUNT_STATUS", "COUNT_EVENTS_DROPPED",
     "COUNT_SIZE", "COUNTER_NAMES", "STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW",
     "STATUS_NOT_FINITE", "STATUS_ZENO", "STATUS_INTERRUPTED", "STATUS_MESSAGES", "METHOD_AUTO", "METHOD_EXPLICIT",
-    "METHOD_ROSENBROCK", "METHOD_DOP853", "EVENT_TIME", "EVENT_GUARD", "EVENT_NEW_SIGN", "EVENT_MONITOR",
-    "EVENT_GUARDS", "EVENT_RETRY_ABOVE", "EVENT_RETRY_BELOW", "EVENT_RETRY_LOST", "EVENT_RETRY_MARGIN",
+    "METHOD_ROSENBROCK", "METHOD_DOP853", "METHOD_ADAMS", "EVENT_TIME", "EVENT_GUARD", "EVENT_NEW_SIGN",
+    "EVENT_MONITOR", "EVENT_GUARDS", "EVENT_RETRY_ABOVE", "EVENT_RETRY_BELOW", "EVENT_RETRY_LOST", "EVENT_RETRY_MARGIN",
     "EVENT_STEP_FLOOR", "event_columns",
 ]
 
@@ -102,6 +107,7 @@ METHOD_AUTO = 0  # the system chooses (systems.preferred_method)
 METHOD_EXPLICIT = 1  # Dormand-Prince 5(4)
 METHOD_ROSENBROCK = 2  # RODAS4
 METHOD_DOP853 = 3  # DOP853
+METHOD_ADAMS = 4  # variable-order Adams-Moulton, Nordsieck form, functional iteration
 
 STEP_ACCEPTED = 0  # verdicts on a trial step
 STEP_RETRY = 1
@@ -133,10 +139,12 @@ def _allocate(system, y_start, n_out, max_events):
 
 @numba.njit(cache=True, inline="always")
 def _workspace(n, m):
-    """Scratch arrays of one run: stepper stages, the Rosenbrock iteration matrix and its
-    pivots, states [n] and guard values [m]."""
+    """Scratch arrays of one run: stepper stages, the Rosenbrock
+    iteration matrix and its pivots, the Adams history, states [n] and guard values [m]."""
+    history = np.zeros((ROWS, n))
+    history[TIME, 0] = np.nan   # no history yet: the first Adams step starts at order 1
     stage_arrays = (np.empty((6, n)), np.empty((6, n)), np.empty((16, n)), np.empty((7, n)), np.empty(n),
-                    np.zeros(2), np.empty(4), np.empty((n, n)), np.empty(n, dtype=np.int64))
+                    np.zeros(2), np.empty(4), np.empty((n, n)), np.empty(n, dtype=np.int64), history)
     states = (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n))
     guards = (np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m),
               np.empty(m))
@@ -194,7 +202,7 @@ def _next_step(t, h, h_max, t_end, max_steps, counters):
 
 @numba.njit(cache=True, inline="always")
 def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, matrix, pivots, k16, ytmp, y1, f1,
-                err, err3, counters):
+                err, err3, history, counters):
     """One step of ``h`` [s] from ``(t, y)`` by the method chosen for the mode into ``y1``
     (and ``f1`` after an explicit step).
 
@@ -208,12 +216,18 @@ def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, m
         Scaled error norm (at most 1 to accept).
     """
     chosen = systems.preferred_method(system, mode, p) if method == 0 else method
+    if chosen == METHOD_ADAMS and not adams_ready(history, t, y):
+        chosen = METHOD_DOP853   # a step that (re)starts the Adams history: _adams_start
     if chosen == METHOD_ROSENBROCK:
         kind = KIND_HERMITE
         counters[COUNT_RHS] += rosenbrock_step(system, t, y, f, h, mode, p, work, stages, matrix, pivots, y1, err)
         counters[COUNT_JACOBIANS] += 1
         order = 4.0
         e = error_norm(y, y1, err, rtol, atol, systems.controlled_size(system))
+    elif chosen == METHOD_ADAMS:
+        kind = KIND_NORDSIECK
+        e, order, calls = adams_step(system, t, y, f, h, mode, p, history, y1, f1, err, rtol, atol)
+        counters[COUNT_RHS] += calls
     elif chosen == METHOD_DOP853:
         kind = KIND_DOP853
         counters[COUNT_RHS] += dop853_step(system, t, y, f, h, mode, p, k16, ytmp, y1, f1, err, err3,
@@ -304,9 +318,23 @@ def _advance(system, t, h, t_stop, e, order, y, f, y1, f1, dwork, kind, mode, p,
         gr[i] = gr1[i]
     monitor_max = max(monitor_max, systems.monitor(system, t, y, mode, p))
     h_regime[systems.regime(system, mode, p)] = h
+    if kind == KIND_NORDSIECK:
+        return t, i_out, monitor_max, adams_accept(dwork, t, h)
     factor = 0.9 * e ** (-1.0 / order) if e > 0.0 else 5.0
     h *= min(5.0, max(0.2, factor))
     return t, i_out, monitor_max, h
+
+
+@numba.njit(cache=True, inline="always")
+def _adams_start(system, method, kind, ready, t, h, y, y1, f1, mode, p, k16, ytmp, f7, history, rtol, atol, err,
+                 counters):
+    """After a DOP853 step that the Adams method took to (re)start, its history at the
+    step's end from the step's continuous extension. Returns whether the extension is
+    ready and the first Adams step [s] (``h`` otherwise)."""
+    if method != METHOD_ADAMS or kind != KIND_DOP853:
+        return ready, h
+    ready = ensure_extension(ready, system, t, y, h, y1, f1, mode, p, k16, ytmp, f7, counters)
+    return ready, adams_start(history, f7, y1, t + h, h, rtol, atol, systems.controlled_size(system), err)
 
 
 @numba.njit(cache=True, inline="always")
@@ -348,7 +376,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
         Largest step [s].
     method : int
         0 lets the system choose per mode (``systems.preferred_method``); 1 Dormand-Prince
-        5(4), 2 RODAS4, 3 DOP853.
+        5(4), 2 RODAS4, 3 DOP853, 4 Adams-Moulton of variable order (Nordsieck form).
     max_steps, max_events : int
         Limits on accepted steps and on logged events.
     interruptible : bool
@@ -367,7 +395,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     """
     y_out, mode_out, events, counters, y, mode = _allocate(system, y_start, t_out.shape[0], max_events)
     stage_arrays, states, guards = _workspace(y.shape[0], events.shape[1] - EVENT_GUARDS - y.shape[0])
-    work, stages, k16, f7, err3, h_regime, pts, matrix, pivots = stage_arrays
+    work, stages, k16, f7, err3, h_regime, pts, matrix, pivots, history = stage_arrays
     y1, f, f1, err, ytmp, ymid, yo = states
     g, gr, g1, gr1, gv, grv, g_tmp, gr_tmp = guards
     t = t_start
@@ -386,8 +414,8 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
                 counters[COUNT_STATUS] = STATUS_INTERRUPTED
                 break
         kind, order, e = _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, matrix, pivots,
-                                     k16, ytmp, y1, f1, err, err3, counters)
-        dwork = f7 if kind == KIND_DOP853 else work
+                                     k16, ytmp, y1, f1, err, err3, history, counters)
+        dwork = f7 if kind == KIND_DOP853 else (history if kind == KIND_NORDSIECK else work)
         ready = kind != KIND_DOP853
         h, verdict = _verdict(t, h, e, order, y1, counters)
         if verdict == STEP_RETRY:
@@ -412,8 +440,12 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             t = t_new
             monitor_max, h = restart(system, t, h, tau_event, y, f, g, gr, mode, p, h_regime, counters)
         elif k_event < 0:
+            ready, h_adams = _adams_start(system, method, kind, ready, t, h, y, y1, f1, mode, p, k16, ytmp, f7,
+                                          history, rtol, atol, err, counters)
             t, i_out, monitor_max, h = _advance(system, t, h, t_end if last else t + h, e, order, y, f, y1, f1,
                                                 dwork, kind, mode, p, k16, ytmp, f7, yo, g, gr, g1, gr1, t_out, i_out,
                                                 y_out, mode_out, monitor_max, h_regime, ready, counters)
+            if method == METHOD_ADAMS and kind == KIND_DOP853:
+                h = h_adams
     i_out = _fill_end(t, y, mode, t_out, i_out, y_out, mode_out, counters)
     return y_out, mode_out, events[:n_events].copy(), counters

@@ -15,6 +15,7 @@ import math
 import numba
 
 from camdyn.integrator.linalg import lu_factor, lu_solve
+from camdyn.integrator.nordsieck import nordsieck_dense
 from camdyn.integrator.tableaus import (
     D8_A,
     D8_A_FROM,
@@ -95,6 +96,7 @@ def hermite(tau, h, y0, f0, y1, f1, out):
 KIND_DP5 = 0
 KIND_HERMITE = 1
 KIND_DOP853 = 2
+KIND_NORDSIECK = 3
 
 
 @numba.njit(cache=True)
@@ -104,12 +106,16 @@ def dense(tau, h, y0, f0, y1, f1, work, kind, out):
     Dormand-Prince 5(4) steps (``kind`` 0) use their own 4th-order continuous extension
     (stages k2..k6 are still in ``work[1:6]``); Rosenbrock steps (1) the cubic Hermite
     interpolant; DOP853 steps (2) their 7th-order extension, whose coefficients
-    :func:`dop853_extend` has put in ``work[0:7]``.
+    :func:`dop853_extend` has put in ``work[0:7]``; Adams steps (3) their Nordsieck
+    polynomial (``work`` is the history of :mod:`camdyn.integrator.nordsieck`).
     """
     if kind == KIND_HERMITE:
         hermite(tau, h, y0, f0, y1, f1, out)
         return
     n = y0.shape[0]
+    if kind == KIND_NORDSIECK:
+        nordsieck_dense(tau, work, n, out)
+        return
     if kind == KIND_DOP853:
         s = 1.0 - tau
         for i in range(n):   # nested form: ((F6 x + F5)(1 - x) + F4) x ...
