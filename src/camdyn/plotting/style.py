@@ -208,12 +208,17 @@ def _texts(fig) -> list[Text]:
         if legend is not None:
             found += legend.get_texts() + [legend.get_title()]
         for axis in (ax.xaxis, ax.yaxis):
-            low, high = sorted(axis.get_view_interval())
+            # compared on the axis's scale (a log axis in decades), so that rounding of the
+            # limits keeps a tick at a limit, and a tick a decade outside stays out
+            scale = axis.get_transform()
+            low, high = sorted(scale.transform(np.asarray(axis.get_view_interval(), dtype=float)))
             pad = 1e-9 * max(abs(low), abs(high), 1e-300)
             for ticks in (axis.get_major_ticks(len(axis.get_majorticklocs())),
                           axis.get_minor_ticks(len(axis.get_minorticklocs()))):
                 for tick in ticks:
-                    if low - pad <= tick.get_loc() <= high + pad:
+                    with np.errstate(divide="ignore", invalid="ignore"):
+                        place = float(scale.transform(np.array([tick.get_loc()], dtype=float))[0])
+                    if low - pad <= place <= high + pad:
                         found += [tick.label1, tick.label2]
     return [t for t in found if t.get_visible() and t.get_text().strip() and t.get_figure() is not None]
 
