@@ -19,11 +19,14 @@ compared with the oracle's to 1e-6 in tests/test_oracle_laws.py) and the same hy
 mode (contact, sliding sign, approach velocity); the states are placed by the oracle's
 own penetration. Tolerance: the penetration (a few um) is a difference of lengths near
 0.1 m, so each model's rounding leaves it good to about 1e-17 m / 1e-6 m = 1e-11
-relative, and the contact force with it; the two acceleration values agree to a few
-1e-12 of the largest moment in the sum (measured: at most 4e-12), checked at 1e-10 of
-it. Every physical term the mutation check alters (the friction moment, the spring's
-arm, the damping branch, the Flores factor, the clipping) is 1e-3 of that scale or more
-at the states chosen.
+relative, and the contact force with it; the two acceleration values (and the
+powers) agree to a few 1e-12 of the largest moment in the sum (measured: at most 2.1e-12
+in contact, 3e-16 out of it), checked at 1e-10 of it. The terms the mutation check
+alters are far above that at the states chosen (measured, as fractions of that scale):
+twice the friction moment 0.09, the Flores factor's 1/16 of the damping 7.5e-3, the
+tilted arm's depth part 1e-3, the spring arm's ``sec(alpha) - 1`` 8e-5 (alpha ~ 0.07
+rad), the swapped branches of law D 0.6; a clipped state pulls with more than 1 N
+unclipped.
 """
 
 import math
