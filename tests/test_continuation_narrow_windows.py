@@ -11,6 +11,8 @@ lie between two speeds where plain runs started on the orbit settle on different
 bisected here by runs of their own). The expected motions of those runs come from the
 runs in the test, not from the continuation."""
 
+import math
+
 import numpy as np
 
 # forcing periods of the plain runs that decide a speed's motion: the slowest-decaying
@@ -108,32 +110,29 @@ def test_period_eight_window_at_19_3_hz_from_its_fold_to_its_doubling():
 
 
 def test_contact_branch_from_5_hz_reports_its_loss_of_contact():
-    """The branch from 5 Hz (step 0.02) reports one loss of contact, below the speed where
-    plain runs started on its last orbit in contact leave the contact (they stay in contact
-    300 revolutions at 6.907105 Hz and impact at 6.907125 Hz, measured) by at most 1e-4 Hz.
-    Where it is placed depends on the steps that reach it: 6.907091 Hz where the branch
-    ended there, its last steps halved to 9e-6 Hz, shorter than the 1.6e-5 Hz left to the
-    zero of its smallest normal force (unreported before the end test took a zero beyond
-    the last step); 6.907016 Hz where the corrector carried the branch across the opening
-    contact onto an impacting orbit and the zero was bisected across the jump (measured
-    after a change of DOP853's error norm; 6.907027 Hz from 6.8 Hz with step 0.005,
-    6.907092 Hz from 5 Hz with step 0.01)."""
+    """The branch from 5 Hz (step 0.02) loses its contact (the smallest unclipped normal
+    force reaches zero), then grazes (its first impact appears), where plain runs of 300
+    revolutions started on its last orbit in contact first impact: they keep contact at
+    6.907105 Hz and impact at 6.907125 Hz (measured here). A step that carried the orbit
+    from contact straight onto an impacting orbit is refused (shorter steps pass the two
+    one at a time): before, the loss was bisected across such a jump, at 6.907016 Hz from
+    5 Hz and at 6.902899 Hz from 6.85 Hz with step 0.01, where plain runs keep contact."""
     import camdyn
     from camdyn.continuation.orbits import flow, shoot
     from camdyn.continuation.results import trace_branch
     problem, branch = trace_branch(camdyn.load_system("sundar2014-impact"), "motion.speed", 5.0, 30.0,
-                                   transient=100, step=0.02)
-    losses = _located(branch, "contact-loss")
+                                   transient=100, step=0.02, max_points=60)
+    losses, grazings = _located(branch, "contact-loss"), _located(branch, "grazing")
     assert len(losses) == 1, branch.bifurcations
+    first = min((g for g in grazings if g > losses[0]), default=math.nan)
     last = [o for o in branch.orbits if o.impacts_per_period == 0 and o.parameter < losses[0]][-1]
-    assert last.parameter < losses[0] < 6.907125 and losses[0] > 6.907105 - 1e-4
 
     def events(speed):                   # events of the 301st revolution from the last orbit in contact
         x = shoot(problem, last.state, speed, 300)
         return flow(problem, x, speed, 1).events
 
-    assert events(losses[0]) == 0
-    assert events(6.907125) > 0
+    assert events(losses[0]) == 0 and events(6.907105) == 0 and events(6.907125) > 0
+    assert 6.907105 - 3e-5 < losses[0] < 6.907105 and 6.907105 - 1e-6 < first < 6.907125, (losses, first)
 
 
 def test_period_four_branch_from_20_7_hz_ends_near_the_period_two_doubling():
