@@ -10,19 +10,11 @@ import math
 
 import numpy as np
 import pytest
-from scipy.linalg import expm
+from test_integrator import AMP, W0, WF, ZETA, exact  # the forced oscillator's closed form
 
 from camdyn.integrator import driver
 from camdyn.integrator import nordsieck as nd
 from camdyn.systems import registry as systems
-
-W0, ZETA, AMP, WF = 3.0, 0.1, 1.0, 2.0
-
-
-def exact(t, y0, v0):
-    """``(y, y')`` of the forced oscillator at ``t`` [s] from ``(y0, v0)``."""
-    a = np.array([[0, 1, 0, 0], [-W0 ** 2, -2 * ZETA * W0, AMP, 0], [0, 0, 0, -WF], [0, 0, WF, 0]], float)
-    return (expm(a * t) @ np.array([y0, v0, 1.0, 0.0]))[:2]
 
 
 def test_start_history_is_the_extension_about_the_step_end():
