@@ -27,12 +27,12 @@ tables of the stored JSON only).
 from __future__ import annotations
 
 import json
+import math
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
-from bench_peers import CASES, RTOLS, TARGETS, Case, numbalsoda_tool, scalar_atol, time_at
+from bench_peers import CASES, RTOLS, TARGETS, Case, measure, numbalsoda_tool, scalar_atol, time_at
 from peer_models import compiled_derivative_array
 from scipy.integrate import ode
 
@@ -89,37 +89,17 @@ def core(method):
     return run
 
 
-def timing(case, rounds=3):
-    """Interleaved best-of-``rounds`` times [ms/rev], errors and counters per rung."""
+def timing(case, rounds=3, rtols=RTOLS):
+    """Interleaved best-of-``rounds`` times [ms/rev], errors and counters per revolution
+    per rung (bench_peers.measure, no time budget)."""
     from numbalsoda import lsoda
     runners = {"camdyn core DOP853": core(driver.METHOD_DOP853), "camdyn core Adams": core(driver.METHOD_ADAMS),
                "numbalsoda LSODA": numbalsoda_tool(lsoda)}
-    for run in runners.values():
-        run(case, RTOLS[0])   # compile and warm up, untimed
-    curves = {name: [] for name in runners}
-    for rtol in RTOLS:
-        best, rows = {}, {}
-        for _ in range(rounds):
-            for name, run in runners.items():
-                if name in rows and "failure" in rows[name]:
-                    continue
-                start = time.perf_counter()
-                try:
-                    alpha, counters = run(case, rtol)
-                except RuntimeError as exc:
-                    rows[name] = {"rtol": rtol, "failure": str(exc)}
-                    continue
-                elapsed = time.perf_counter() - start
-                best[name] = min(best.get(name, np.inf), elapsed)
-                rows[name] = {"rtol": rtol, "error": case.error(alpha),
-                              **{k: v / case.revolutions for k, v in counters.items()}}
-        for name, row in rows.items():
-            if name in best:
-                row["ms_per_rev"] = 1e3 * best[name] / case.revolutions
-            curves[name].append(row)
-        print(f"  rtol {rtol:.0e}: " + ", ".join(f"{n}: {r['ms_per_rev']:.3g} ms/rev err {r['error']:.1e}"
-                                               if "ms_per_rev" in r else f"{n}: {r['failure']}"
-                                               for n, r in rows.items()), flush=True)
+    curves = measure(case, runners, rtols, rounds, math.inf)
+    for rows in curves.values():                   # counters per revolution, as adams.json holds them
+        for row in rows:
+            row.update({k: v / case.revolutions for k, v in row.items()
+                        if k in ("accepted_steps", "rejected_steps", "rhs_calls", "jacobians")})
     return curves
 
 
