@@ -326,10 +326,10 @@ def find_orbit(problem: Problem, start=None, value: float | None = None, periods
             return make_orbit(problem, x, value, periods, run, iteration, size)
         if iteration < max_iterations:
             if matrix is None or not size < 0.25 * previous:      # chord steps while they contract fast
-                matrix = _newton_matrix(problem, x, value, periods, budget, iteration, unit)
+                variational = _newton_matrix(problem, x, value, periods, budget, iteration, unit)
                 if budget == MAX_STEPS:
-                    budget = max(NEWTON_STEP_FACTOR * matrix.steps, NEWTON_STEP_FLOOR)
-                matrix = matrix.matrix
+                    budget = max(NEWTON_STEP_FACTOR * variational.steps, NEWTON_STEP_FLOOR)
+                matrix = variational.matrix
             previous = size
             x = x + np.linalg.lstsq(matrix - eye, -residual, rcond=None)[0]
     raise SimulationError(f"no period-{periods} orbit found at {problem.name} = {value:g}{unit}: Newton's "
