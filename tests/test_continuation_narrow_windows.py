@@ -163,3 +163,41 @@ def test_period_four_branch_from_20_7_hz_ends_near_the_period_two_doubling():
     assert len(doubled) == 1 and len(doubled[0].orbits) < 20, [len(b.orbits) for b in doubled]
     last = doubled[0].orbits[-1]
     assert last.periods == 8 and np.max(np.abs(shoot(problem, last.state, last.parameter, 4) - last.state)) < 1e-6
+
+
+def test_period_five_branch_from_9_hz_ends_at_the_grazing_of_a_closest_approach():
+    """The period-5 branch from 9.0 Hz (8 impacts per 5 revolutions) ends at 9.00712 Hz
+    with its step below the minimum: between two of its contacts the follower comes back
+    towards the cam without touching it, and that gap closes (6e-6 m at 9.0071 Hz), so
+    that past it a ninth contact appears and no corrected orbit exists. The end is
+    reported as a grazing at the secant zero of the gap. Plain runs of 200 revolutions
+    from the last orbit bracket it: 8 impacts in every 5 revolutions at 9.0071215 Hz,
+    a ninth in some at 9.0071225 Hz (measured here). The gap the orbit reports is the one
+    a plain run sampled at 400 kHz from the orbit shows."""
+    import camdyn
+    from camdyn.continuation import continue_orbits, find_orbit
+    from camdyn.continuation.orbits import transient_state
+    problem = _problem(9.0)
+    orbit = find_orbit(problem, start=transient_state(problem, 400), periods=5)
+    assert orbit.periods == 5 and orbit.impacts_per_period == 8 and orbit.stable
+    branch = continue_orbits(problem, orbit, 9.01, step=5e-4, max_step=2e-3, max_points=40)
+    grazings = _located(branch, "grazing")
+    assert "step fell below" in branch.stopped and len(grazings) == 1, (branch.stopped, branch.bifurcations)
+    last = branch.orbits[-1]
+
+    def impacts(speed, start, revolutions=200):     # impacts in each 5 revolutions of a plain run
+        system = camdyn.load_system("sundar2014-impact").with_values(**{"motion.speed": speed})
+        t = camdyn.simulate(system, revolutions=revolutions, initial_state=start, rtol=1e-11, atol=1e-14,
+                            sample_rate=2000)["impact_time"].values * speed
+        return np.bincount((t // 5).astype(int), minlength=revolutions // 5)[:revolutions // 5]
+
+    assert np.all(impacts(9.0071215, last.state) == 8)
+    assert np.any(impacts(9.0071225, last.state) == 9)
+    assert 9.0071215 < grazings[0] < 9.0071225, grazings
+    near = find_orbit(problem, start=last.state, value=9.0071, periods=5)
+    system = camdyn.load_system("sundar2014-impact").with_values(**{"motion.speed": 9.0071})
+    run = camdyn.simulate(system, revolutions=5, initial_state=near.state, rtol=1e-11, atol=1e-14,
+                          sample_rate=400e3)
+    delta, touching = run["penetration"].values, run["in_contact"].values > 0
+    peaks = (delta[1:-1] > delta[:-2]) & (delta[1:-1] >= delta[2:]) & ~touching[1:-1] & (delta[1:-1] < 0)
+    assert abs(near.flight_margin - (-np.max(delta[1:-1][peaks]))) < 1e-10   # 6.2536e-6 m, off by 2.6e-11

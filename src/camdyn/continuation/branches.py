@@ -41,7 +41,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from camdyn.continuation import multiple
-from camdyn.continuation.ends import END_FRACTION, contact_loss_end, grazing_end
+from camdyn.continuation.ends import END_FRACTION, contact_loss_end, flight_grazing_end, grazing_end
 from camdyn.continuation.orbits import (
     SAMPLES_PER_PERIOD,
     Flow,
@@ -478,7 +478,7 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
             ds *= 0.5
             if ds < min_step:
                 branch.bifurcations.extend(Bifurcation(*end) for end in contact_loss_end(branch.orbits)
-                                           + grazing_end(branch.orbits))
+                                           + grazing_end(branch.orbits) + flight_grazing_end(branch.orbits))
                 return Branch(branch.orbits, branch.bifurcations,
                               f"the step fell below {min_step:g} at {problem.name} = {point.orbit.parameter:.9g}")
             continue

@@ -9,7 +9,7 @@ import math
 
 from camdyn.continuation.orbits import Orbit
 
-__all__ = ["END_FRACTION", "contact_loss_end", "grazing_end"]
+__all__ = ["END_FRACTION", "contact_loss_end", "flight_grazing_end", "grazing_end"]
 
 #: A branch that ends with its last orbit's contact margin (the smallest guard value, the
 #: smallest normal force) below this fraction of the margin's largest along the branch
@@ -43,13 +43,31 @@ def contact_loss_end(orbits: list[Orbit]) -> list[tuple[str, float, Orbit]]:
     rig, no corrected point exists past it, and the halved steps before the end can be
     shorter than the distance left to the zero: from 5 Hz the last step was 9.1e-6 Hz,
     the zero 1.6e-5 Hz beyond it, and the contact loss went unreported.)"""
+    return _secant_end("contact-loss", orbits, [o.force_minimum for o in orbits])
+
+
+def flight_grazing_end(orbits: list[Orbit]) -> list[tuple[str, float, Orbit]]:
+    """A cam-follower branch that ends (the corrector fails) as the follower's closest
+    approach to the cam in flight closes (:func:`~camdyn.continuation.margins.flight_margin`):
+    a grazing at the zero of the secant through the last two points' smallest gaps, on
+    the rule of :func:`contact_loss_end`. (The chapter 3 rig's period-5 branch from 9.0 Hz
+    ends so at 9.00712 Hz: the gap of its closest approach, 6.3e-6 m at 9.0071 Hz and
+    5.8e-7 m at 9.00712 Hz, falls linearly to zero at 9.007122 Hz, where a new contact
+    appears and no corrected point is found past it.)"""
+    return _secant_end("grazing", orbits, [o.flight_margin for o in orbits])
+
+
+def _secant_end(kind: str, orbits: list[Orbit], margins: list[float]) -> list[tuple[str, float, Orbit]]:
+    """``(kind, zero, last orbit)`` where the secant through the last two ``margins``
+    (falling, still positive) reaches zero within the last step beyond the end, or
+    anywhere once the last margin is below ``END_FRACTION`` of the largest."""
     if len(orbits) < 2:
         return []
-    a, b = orbits[-2], orbits[-1]
-    if not (math.isfinite(a.force_minimum) and a.force_minimum > b.force_minimum > 0):
+    (a, b), (ma, mb) = orbits[-2:], margins[-2:]
+    if not (math.isfinite(ma) and ma > mb > 0):
         return []
-    zero = b.parameter - b.force_minimum * (b.parameter - a.parameter) / (b.force_minimum - a.force_minimum)
-    largest = max(o.force_minimum for o in orbits)
-    if abs(zero - b.parameter) > abs(b.parameter - a.parameter) and not b.force_minimum < END_FRACTION * largest:
+    zero = b.parameter - mb * (b.parameter - a.parameter) / (mb - ma)
+    largest = max(m for m in margins if math.isfinite(m))
+    if abs(zero - b.parameter) > abs(b.parameter - a.parameter) and not mb < END_FRACTION * largest:
         return []
-    return [("contact-loss", zero, b)]
+    return [(kind, zero, b)]

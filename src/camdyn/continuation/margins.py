@@ -12,6 +12,12 @@ functions of loss of contact and of sliding reversal along a branch.
   with ``s`` the sign of ``vr``'s mean over them (the direction the branch slides in).
 
 Both minima are refined by the parabola through the smallest sample and its neighbours.
+
+- Grazing in flight is where the follower's closest approach to the cam between two
+  contacts touches it: the test function is the smallest gap at the interior maxima of
+  the penetration over samples out of contact, ``min(-delta_max) = 0`` (Di Bernardo et
+  al. 2008, *Piecewise-smooth Dynamical Systems*, sec. 8.2). Past it the orbit gains a
+  contact; a branch that cannot step across it ends there.
 """
 
 from __future__ import annotations
@@ -24,10 +30,11 @@ from camdyn.model import layout as L
 from camdyn.model.outputs import CHANNELS, derived
 from camdyn.systems import registry as systems
 
-__all__ = ["contact_margins"]
+__all__ = ["contact_margins", "flight_margin"]
 
 _FN = [name for name, _, _ in CHANNELS].index("Fn")
 _VR = [name for name, _, _ in CHANNELS].index("sliding_velocity")
+_DELTA = [name for name, _, _ in CHANNELS].index("penetration")
 
 
 def _smallest(values: np.ndarray) -> float:
@@ -74,3 +81,28 @@ def contact_margins(system_id: int, p: np.ndarray, times: np.ndarray, states: np
     sign = 1.0 if np.mean(vr[in_contact]) >= 0.0 else -1.0
     signed = np.where(in_contact, sign * vr, np.inf)
     return force, _smallest(signed)
+
+
+def flight_margin(system_id: int, p: np.ndarray, times: np.ndarray, states: np.ndarray,
+                  modes: np.ndarray, contact_times: np.ndarray | None) -> float:
+    """The cam-follower's smallest gap at a closest approach in flight over an orbit's
+    samples [m]: ``-delta`` at the largest interior maximum of the penetration ``delta``
+    among samples out of contact, with both neighbours out of contact and no contact
+    event between them (a contact shorter than the sample spacing), refined by the
+    parabola through it and its neighbours; zero at a grazing (NaN for another system or
+    an orbit with no such maximum). ``contact_times`` [s] are the run's contact events;
+    the other arguments as :func:`contact_margins`."""
+    if system_id != systems.CAM_FOLLOWER or times.size < 4 or contact_times is None:
+        return math.nan
+    delta = derived(times[:-1], states[:-1, :3], modes[:-1], p)[:, _DELTA]
+    free = modes[:-1, L.MODE_CONTACT] < 0.5
+    left, right = np.roll(delta, 1), np.roll(delta, -1)
+    peaks = free & np.roll(free, 1) & np.roll(free, -1) & (delta > left) & (delta >= right)
+    for t in contact_times:        # a contact in the interval (k - 1, k): no peak beside it
+        k = int(np.searchsorted(times, t)) % peaks.size
+        peaks[[k - 1, k, (k + 1) % peaks.size]] = False
+    if not peaks.any():
+        return math.nan
+    curvature = left[peaks] - 2.0 * delta[peaks] + right[peaks]
+    vertex = delta[peaks] - (right[peaks] - left[peaks]) ** 2 / (8.0 * np.minimum(curvature, -1e-300))
+    return float(-np.max(vertex))

@@ -23,7 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from camdyn.continuation import multiple
-from camdyn.continuation.margins import contact_margins
+from camdyn.continuation.margins import contact_margins, flight_margin
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.integrator import driver
@@ -79,6 +79,8 @@ class Flow:
         The hybrid mode at each sample.
     steps : int
         The integrator's steps, accepted and rejected (0 where not counted).
+    contact_times : ndarray or None
+        Times of the events on the contact guard (guard 0), onsets and ends [s].
     """
 
     end: np.ndarray
@@ -90,6 +92,7 @@ class Flow:
     times: np.ndarray
     modes: np.ndarray
     steps: int = 0
+    contact_times: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -135,6 +138,10 @@ class Orbit:
     segment_states : ndarray (m, u) or None
         With multiple shooting (``m`` segments), the unknowns at each segment's start
         (row 0 is ``state``); None with single shooting.
+    flight_margin : float
+        The cam-follower's smallest gap at a closest approach in flight [m]
+        (:func:`~camdyn.continuation.margins.flight_margin`; NaN for a test model or an
+        orbit without one).
     """
 
     state: np.ndarray
@@ -153,6 +160,7 @@ class Orbit:
     sliding_minimum: float = math.nan
     extent: np.ndarray | None = None
     segment_states: np.ndarray | None = None
+    flight_margin: float = math.nan
 
 
 def _full(problem: Problem, x: np.ndarray, value: float) -> np.ndarray:
@@ -193,7 +201,8 @@ def _variational(problem: Problem, p, period, x, value, t0, t1, samples, max_ste
     matrix = y[-1, n:].reshape(n, n)[:u, :u].copy()
     return Flow(y[-1, :u].copy(), matrix, int(on_contact.sum()), int(counters[driver.COUNT_EVENTS]),
                 _guard_minimum(problem.system_id, p, times, states) if samples else math.nan, states, times, modes,
-                int(counters[driver.COUNT_ACCEPTED] + counters[driver.COUNT_REJECTED]))
+                int(counters[driver.COUNT_ACCEPTED] + counters[driver.COUNT_REJECTED]),
+                log[log[:, driver.EVENT_GUARD] == 0, driver.EVENT_TIME].copy())
 
 
 def _guard_minimum(system_id: int, p: np.ndarray, times: np.ndarray, states: np.ndarray) -> float:
@@ -259,7 +268,9 @@ def make_orbit(problem: Problem, x, value, periods, run: Flow, iterations, resid
                  periods, values,
                  bool(np.all(np.abs(values) < 1.0 - STABILITY_MARGIN)), run.impacts, iterations, residual,
                  run.guard_minimum, run.matrix, force, sliding,
-                 np.max(np.abs(run.states[:, :problem.unknowns]), axis=0) if run.times.size > 2 else None)
+                 np.max(np.abs(run.states[:, :problem.unknowns]), axis=0) if run.times.size > 2 else None,
+                 flight_margin=flight_margin(problem.system_id, p, run.times, run.states, run.modes,
+                                             run.contact_times))
 
 
 def find_orbit(problem: Problem, start=None, value: float | None = None, periods: int = 1, tolerance: float = 1e-10,
@@ -379,7 +390,8 @@ def _join(problem: Problem, p: np.ndarray, runs: list[Flow], matrix: np.ndarray)
     times = np.concatenate([runs[0].times] + [run.times[1:] for run in runs[1:]])
     modes = np.concatenate([runs[0].modes] + [run.modes[1:] for run in runs[1:]])
     return Flow(runs[-1].end, matrix, sum(run.impacts for run in runs), sum(run.events for run in runs),
-                _guard_minimum(problem.system_id, p, times, states), states, times, modes)
+                _guard_minimum(problem.system_id, p, times, states), states, times, modes,
+                contact_times=np.concatenate([run.contact_times for run in runs]))
 
 
 def segment_ends(problem: Problem, states, value: float, periods: int = 1) -> np.ndarray:
