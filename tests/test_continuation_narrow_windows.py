@@ -14,6 +14,7 @@ runs in the test, not from the continuation."""
 import math
 
 import numpy as np
+import pytest
 
 # forcing periods of the plain runs that decide a speed's motion: the slowest-decaying
 # stable orbit at the bracketing speeds below has |mu| = 0.946 per 8 revolutions
@@ -201,3 +202,41 @@ def test_period_five_branch_from_9_hz_ends_at_the_grazing_of_a_closest_approach(
     delta, touching = run["penetration"].values, run["in_contact"].values > 0
     peaks = (delta[1:-1] > delta[:-2]) & (delta[1:-1] >= delta[2:]) & ~touching[1:-1] & (delta[1:-1] < 0)
     assert abs(near.flight_margin - (-np.max(delta[1:-1][peaks]))) < 1e-10   # 6.2536e-6 m, off by 2.6e-11
+
+
+def test_period_three_branch_doubles_again_at_8_943_hz_and_grazes_at_8_9474_hz():
+    """Past its doubling at 8.91397 Hz the period-3 branch from 8.9 Hz turns stable again at
+    a second doubling, 8.94329 Hz, and ends at 8.947395 Hz, where the gap of a closest
+    approach in flight closes (reported as a grazing). Plain runs from its stable orbit at
+    8.945 Hz: at 8.9432 Hz the alternation of its Poincare points (period 6) stays at
+    3.55e-4 rad from 1500 to 4500 revolutions; at 8.9434 Hz it decays (6.8e-6 to 7e-9 rad:
+    period 3, whose multiplier is near -1 there, so that 1500 revolutions alone look like
+    period 6). The orbit found at 8.947395 Hz keeps 5 impacts in every 3 revolutions of a
+    201-revolution plain run, with a gap of 1.3e-8 m; none is found at 8.947396 Hz."""
+    import camdyn
+    from camdyn.continuation import continue_orbits, find_orbit
+    from camdyn.continuation.orbits import shoot, transient_state
+    from camdyn.errors import SimulationError
+    problem = _problem(8.9)
+    orbit = find_orbit(problem, start=transient_state(problem, 400), periods=3)
+    branch = continue_orbits(problem, orbit, 8.96, step=5e-4, max_step=2e-3, max_points=80)
+    doublings, grazings = _located(branch, "period-doubling"), _located(branch, "grazing")
+    assert len(doublings) == 2 and 8.9432 < doublings[1] < 8.9434, branch.bifurcations
+    assert len(grazings) == 1 and 8.947395 < grazings[0] < 8.947396, branch.bifurcations
+    stable = min(branch.orbits, key=lambda o: abs(o.parameter - 8.945))
+    assert stable.stable and stable.impacts_per_period == 5
+
+    def alternation(speed, revolutions):          # |alpha(n + 3) - alpha(n)| after the revolutions [rad]
+        x = shoot(problem, stable.state, speed, revolutions)
+        return abs(shoot(problem, x, speed, 3)[0] - x[0])
+
+    assert alternation(8.9432, 1500) > 1e-4 and alternation(8.9432, 4500) > 1e-4
+    assert alternation(8.9434, 1500) > 1e-6 > 1e-7 > alternation(8.9434, 4500)
+    last = find_orbit(problem, start=branch.orbits[-1].state, value=8.947395, periods=3)
+    assert 0 < last.flight_margin < 2e-8
+    system = camdyn.load_system("sundar2014-impact").with_values(**{"motion.speed": 8.947395})
+    t = camdyn.simulate(system, revolutions=201, initial_state=last.state, rtol=1e-11, atol=1e-14,
+                        sample_rate=2000)["impact_time"].values * 8.947395
+    assert np.all(np.bincount((t // 3).astype(int), minlength=67)[:67] == 5)
+    with pytest.raises(SimulationError):
+        find_orbit(problem, start=last.state, value=8.947396, periods=3)
