@@ -40,7 +40,9 @@ samples from ``discard`` periods of the starting cam speed on (the run is sample
   the window: all ``kept`` at a constant cam speed, else as many as it holds.
 - ``stick_slip`` (two followers): per follower, the sticks, slips (break-aways) and
   sprags of the run's event log at or after the window's first sample, per cam
-  revolution of the window [1/rev].
+  revolution of the window [1/rev]; NaN where the log ran out of room (the run's
+  ``events_dropped`` attribute: the log holds 64 + 16 events per period of the starting
+  speed).
 """
 
 from __future__ import annotations
@@ -91,18 +93,25 @@ def variables(kind: str, metrics, kept: int, harmonics: int = 10) -> dict:
     return out
 
 
+def _from(values: np.ndarray, start: int) -> np.ndarray:
+    """The samples from the one before the window's first (index ``start``) on; with no
+    sample before it (nothing discarded) the first one stands in for it."""
+    return values[start - 1:] if start > 0 else np.concatenate([values[:1], values])
+
+
 def _channels(ds, kind: str, start: int) -> dict:
-    """The window's channels as arrays (samples, followers) (cam ones (samples,))."""
+    """The window's channels as arrays (samples, followers) (cam ones (samples,)), from
+    the sample before the window on."""
     def per(name):
-        values = ds[name].values[start - 1:]
+        values = _from(ds[name].values, start)
         return values if values.ndim == 2 else values[:, None]
     out = {name: per(name) for name in ("alpha", "alpha_dot", "Fn", "in_contact", "cam_work")}
     if "sliding_velocity" in ds:
         out["sliding_velocity"] = per("sliding_velocity")
-    out["cam_angle"] = ds["cam_angle"].values[start - 1:]
+    out["cam_angle"] = _from(ds["cam_angle"].values, start)
     out["cam_start"] = float(ds["cam_angle"].values[0])
     if kind != "flexible-pivot":
-        out["cam_speed"] = ds["cam_speed"].values[start - 1:]
+        out["cam_speed"] = _from(ds["cam_speed"].values, start)
     else:
         out["bearing"] = np.hypot(ds["Nx"].values[start:], ds["Ny"].values[start:])
     return out
@@ -194,7 +203,7 @@ def point_metrics(ds, kind: str, metrics, revolutions: int, discard: int, sample
         what = ds["transition_kind"].values[late]
         for name, event in (("sticks", "stick"), ("slips", "slip"), ("sprags", "sprag")):
             counts = np.array([np.count_nonzero((who == k) & (what == event)) for k in (1, 2)], dtype=float)
-            out[f"{name}_per_revolution"] = counts / turns
+            out[f"{name}_per_revolution"] = counts / turns if not ds.attrs.get("events_dropped") else counts * np.nan
     return out
 
 
