@@ -6,6 +6,10 @@ noise and the cam harmonics' leakage: above :data:`NOISE_FLOOR` times the median
 amplitude above the cam speed, and above :data:`RELATIVE_FLOOR` times the largest cam
 harmonic (:func:`peak_threshold`). The same rule marks the peaks of the figures
 (:func:`camdyn.plotting.plot_spectrum`) and lists them in :func:`spectrum_summary`.
+
+A mechanism's run (:mod:`camdyn.io.mechanism_config`) goes through the same functions
+one follower at a time: :func:`follower_series` takes that follower's series (and the
+shaft's) and the cam speed the harmonics are counted from.
 """
 
 from __future__ import annotations
@@ -18,7 +22,7 @@ from camdyn.analysis.harmonics import amplitude_spectrum, harmonic_amplitudes
 from camdyn.errors import ParameterError
 
 __all__ = ["NOISE_FLOOR", "RELATIVE_FLOOR", "peak_rule", "peak_threshold", "resonance_peaks",
-           "spectrum_summary"]
+           "spectrum_summary", "follower_series"]
 
 #: a resonance peak stands above this many times the median amplitude above the cam speed [-]
 NOISE_FLOOR = 10.0
@@ -110,3 +114,41 @@ def spectrum_summary(ds: xr.Dataset, variable: str = "alpha_ddot", window: int =
                           for k, a in zip(range(1, harmonics + 1), amps)],
             "peak_rule": peak_rule(), "peak_threshold": peak_threshold(freq, amp, speed),
             "peaks": [{"frequency_hz": f, "amplitude": a} for f, a in resonance_peaks(freq, amp, speed, peaks)]}
+
+
+def follower_series(ds: xr.Dataset, follower: int | None = None, window: int | None = None) -> xr.Dataset:
+    """One follower's time series of a run, with the cam speed ``speed_hz`` [Hz] that
+    :func:`spectrum_summary` and :func:`camdyn.plotting.plot_spectrum` count the cam
+    harmonics from.
+
+    A run of two followers (a ``follower`` dimension) gives follower ``follower`` (1 or
+    2) and the shaft's series; any other run its own (``follower`` None or 1). Series
+    over other dimensions (the event log) are left out. A run at a constant cam speed
+    keeps it (``speed_hz``, or the constant ``cam_speed`` [rad/s] / 2 pi); for a cam
+    turning as a body under a torque the speed is the mean over the last ``window``
+    whole cam turns: ``window / (n dt)``, with ``n`` the samples before the last one
+    over which the cam angle advanced by ``2 pi window`` (to within a sample), so that
+    :func:`camdyn.analysis.harmonics.steady_window` takes those ``n`` samples. Its cam
+    harmonics are then multiples of that mean speed, smeared by the speed's fluctuation.
+    """
+    if "follower" in ds.dims:
+        if follower not in (1, 2):
+            raise ParameterError(f"the run has two followers: give follower 1 or 2, got {follower!r}")
+        ds = ds.sel(follower=follower)
+    elif follower not in (None, 1):
+        raise ParameterError(f"the run has one follower: follower must be 1, got {follower!r}")
+    ds = ds.drop_dims([d for d in ds.dims if d != "time"])
+    if "speed_hz" in ds.attrs:
+        return ds
+    speed = ds["cam_speed"].values
+    if np.ptp(speed) == 0.0:
+        return ds.assign_attrs(speed_hz=abs(float(speed[0])) / (2.0 * np.pi))
+    if window is None or window < 1:
+        raise ParameterError(f"a cam under a torque needs a window of one or more whole turns, got {window!r}")
+    turned = np.abs(ds["cam_angle"].values[-1] - ds["cam_angle"].values) / (2.0 * np.pi)
+    reached = np.nonzero(turned[:-1] >= window)[0]
+    if reached.size == 0:
+        raise ParameterError(f"the cam turned {float(turned.max()):.3g} times in the run; the window needs {window}")
+    samples = turned.size - 1 - int(reached[-1])
+    step = float(ds["time"].values[1] - ds["time"].values[0])
+    return ds.assign_attrs(speed_hz=window / (samples * step))

@@ -109,10 +109,13 @@ def regime_map_command(source: str = typer.Argument(..., metavar="PRESET_OR_TOML
 
 def spectrum(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              set_: Optional[List[str]] = SetOption,
-             speed: Optional[str] = typer.Option(None, help="Cam speed, e.g. 300rpm or 5Hz (default the preset's)."),
-             revolutions: float = typer.Option(40.0, help="Cam periods simulated."),
+             speed: Optional[str] = typer.Option(None, help="Cam speed, e.g. 300rpm or 5Hz (default the preset's; "
+                                                            "a mechanism's starting speed)."),
+             revolutions: float = typer.Option(40.0, help="Cam periods simulated (of the starting speed)."),
              window: int = typer.Option(20, help="Whole revolutions at the end analysed (Hann window)."),
-             variable: str = typer.Option("alpha_ddot", help="alpha_ddot, alpha, Fn, Ff, Nx, Ny, ..."),
+             variable: str = typer.Option("alpha_ddot", help="alpha_ddot, alpha, Fn, Ff, Nx, Ny, cam_speed, ..."),
+             follower: Optional[int] = typer.Option(None, help="Of two followers on one cam, the one analysed "
+                                                               "(1 or 2; default both)."),
              sample_rate: str = typer.Option("20kHz", help="Output sample rate."),
              harmonics: int = typer.Option(10, help="Cam harmonics listed."),
              peaks: int = typer.Option(3, help="Largest peaks away from the cam harmonics listed (resonances)."),
@@ -120,37 +123,101 @@ def spectrum(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              force: bool = ForceOption,
              json_: bool = JsonOption):
     """Amplitude spectrum of a simulated response: cam harmonics, resonance peaks and the
-    linearized natural frequency."""
+    linearized natural frequency. A mechanism file (docs/mechanisms.md) is analysed per
+    follower."""
     from camdyn.analysis.spectra import spectrum_summary
-    from camdyn.cli.common import parse_hertz
     from camdyn.plotting import plot_spectrum
-    from camdyn.simulation.runner import simulate
 
     check_outputs(figure=plot, force=force)
-    system = load_source(source, set_)
-    ds = simulate(system, speed=speed, revolutions=revolutions, sample_rate=parse_hertz(sample_rate))
-    if variable not in ds or ds[variable].dims != ("time",):
-        raise ParameterError(f"--variable must be a time series of the result, one of "
-                             f"{sorted(k for k in ds.data_vars if ds[k].dims == ('time',))}, got {variable!r}")
-    summary = spectrum_summary(ds, variable, window=window, harmonics=harmonics, peaks=peaks)
-    if not json_:
-        _print_spectrum(summary, variable, window)
+    runs = _spectrum_runs(source, set_, speed, revolutions, sample_rate, follower, window, plot is not None)
+    summaries = []
+    for number, ds in runs:
+        if variable not in ds or ds[variable].dims != ("time",):
+            raise ParameterError(f"--variable must be a time series of the result, one of "
+                                 f"{sorted(k for k in ds.data_vars if ds[k].dims == ('time',))}, got {variable!r}")
+        summary = spectrum_summary(ds, variable, window=window, harmonics=harmonics, peaks=peaks)
+        if number is not None:
+            summary["follower"] = number
+        summaries.append(summary)
+        if not json_:
+            _print_spectrum(summary, variable, window)
     files = []
     if plot is not None:
-        plot_spectrum(ds, plot, variable=variable, harmonics=harmonics, revolutions=window,
-                      resonances=[p["frequency_hz"] for p in summary["peaks"]])
+        plot_spectrum(runs[0][1], plot, variable=variable, harmonics=harmonics, revolutions=window,
+                      resonances=[p["frequency_hz"] for p in summaries[0]["peaks"]])
         files.append(announce(plot, json_))
     if json_:
+        _emit_spectra(summaries, runs[0][1], files)
+
+
+def _spectrum_runs(source: str, assignments, speed, revolutions: float, sample_rate: str, follower, window: int,
+                   plot: bool) -> list:
+    """The simulated runs a spectrum analyses, as ``(follower number or None, time
+    series)`` (:func:`camdyn.analysis.spectra.follower_series`): the cam-follower's run,
+    or a mechanism's per follower (one, or each of two unless ``follower`` picks one)."""
+    from camdyn.analysis.spectra import follower_series
+    from camdyn.cli.common import parse_hertz
+    from camdyn.params.mechanism import is_mechanism
+
+    rate = parse_hertz(sample_rate)
+    if not is_mechanism(source):
+        if follower not in (None, 1):
+            raise ParameterError(f"--follower: a cam-follower has one follower, got {follower}")
+        from camdyn.simulation.runner import simulate
+        return [(None, simulate(load_source(source, assignments), speed=speed, revolutions=revolutions,
+                                sample_rate=rate))]
+    from camdyn.cli.mechanism import DEFAULT_RTOL
+    from camdyn.io.mechanism_config import load_mechanism, simulate_mechanism
+    from camdyn.params.config import parse_assignments
+    from camdyn.params.units import parse_speed
+    from camdyn.sweeps.mechanism_metrics import FOLLOWERS
+
+    overrides = parse_assignments(assignments)
+    if speed is not None:
+        parse_speed(speed, "--speed")
+        overrides["system.motion.speed"] = speed
+    mechanism = load_mechanism(source, overrides)
+    count = FOLLOWERS[mechanism.spec.kind]
+    if follower is not None and not 1 <= follower <= count:
+        raise ParameterError(f"--follower: the {mechanism.spec.kind} mechanism has {count} follower"
+                             f"{'s' if count > 1 else ''}, got {follower}")
+    numbers = [follower] if follower is not None else list(range(1, count + 1))
+    if plot and len(numbers) > 1:
+        raise ParameterError("--plot draws one follower's spectrum: give --follower 1 or 2")
+    if not (revolutions > 0 and window >= 1):
+        raise ParameterError(f"--revolutions must be positive and --window at least 1, got {revolutions}, {window}")
+    ds = simulate_mechanism(mechanism, revolutions=revolutions, sample_rate=rate, rtol=DEFAULT_RTOL)
+    extra = {}
+    if mechanism.spec.kind == "flexible-pivot":
+        from camdyn.simulation.flexible_pivot import natural_frequencies
+        extra["natural_frequency_Hz"] = float(natural_frequencies(mechanism.system, mechanism.spec.pivot_stiffness)[0])
+    label = (lambda k: k) if count > 1 else (lambda k: None)
+    return [(label(k), follower_series(ds, k if count > 1 else None, window).assign_attrs(**extra)) for k in numbers]
+
+
+def _emit_spectra(summaries: list, ds, files: list) -> None:
+    """The ``camdyn.spectrum/1`` document: one follower's summary with its harmonics and
+    peaks, or, for two, the shared keys and a ``followers`` list of each one's."""
+    mechanism = {"mechanism": str(ds.attrs["mechanism"])} if "mechanism" in ds.attrs else {}
+    if len(summaries) == 1:
+        summary = dict(summaries[0], **mechanism)
         details = {k: summary.pop(k) for k in ("harmonics", "peaks")}
         emit_json("spectrum", summary, **details, files=files)
+        return
+    shared = ("variable", "units", "speed_hz", "window_revolutions", "peak_rule")
+    each = [{k: v for k, v in s.items() if k not in shared} for s in summaries]
+    emit_json("spectrum", dict({k: summaries[0][k] for k in shared}, **mechanism), followers=each, files=files)
 
 
 def _print_spectrum(summary: dict, variable: str, window: int) -> None:
     unit = summary["units"]
-    console.print(f"{variable} at {summary['speed_hz']:.4g} Hz, last {window} revolutions "
-                  f"(linearized natural frequency {summary['natural_frequency_hz']:.5g} Hz)", highlight=False)
+    who = f"follower {summary['follower']}: " if "follower" in summary else ""
+    natural = summary["natural_frequency_hz"]
+    known = f" (linearized natural frequency {natural:.5g} Hz)" if np.isfinite(natural) else ""
+    console.print(f"{who}{variable} at {summary['speed_hz']:.4g} Hz, last {window} revolutions{known}",
+                  highlight=False)
     console.print("cam harmonics: " + ", ".join(f"{h['order']}x {h['amplitude']:.4g}"
                                                for h in summary["harmonics"]) + f" [{unit}]", highlight=False,
-                  soft_wrap=True)
+                  markup=False, soft_wrap=True)
     for p in summary["peaks"]:
         console.print(f"peak at {p['frequency_hz']:.5g} Hz: {p['amplitude']:.4g} {unit}", highlight=False)

@@ -116,12 +116,14 @@ DRIVEN_STATE = (
 def run_mechanism(system_id, p, y0, duration, sample_rate, period, rtol, atol, method, max_step):
     """Integrate mechanism ``system_id`` (:func:`_run_counters`: the shared checks and the
     compiled call) and return the output times [s], states, modes, events and the
-    counters as a Dataset's attributes."""
+    counters as a Dataset's attributes (``events``: those logged; ``events_dropped``:
+    those past the log's room, located and applied but not logged)."""
     t_out, y, modes, events, counters, elapsed = _run_counters(system_id, p, y0, duration, sample_rate, period,
                                                                rtol, atol, method, max_step)
     attrs = {"rtol": rtol, "atol": atol, "method": method, "elapsed_s": elapsed,
              "accepted_steps": int(counters[driver.COUNT_ACCEPTED]),
-             "rejected_steps": int(counters[driver.COUNT_REJECTED]), "events": int(events.shape[0])}
+             "rejected_steps": int(counters[driver.COUNT_REJECTED]), "events": int(events.shape[0]),
+             "events_dropped": int(counters[driver.COUNT_EVENTS_DROPPED])}
     return t_out, y, modes, events, attrs
 
 

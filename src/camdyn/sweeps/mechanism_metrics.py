@@ -27,6 +27,22 @@ samples from ``discard`` periods of the starting cam speed on (the run is sample
   ed., 2012, eq 11.18) and its mean [rad/s].
 - ``bearing_force`` (flexible pivot): the largest sampled magnitude of the bearing's
   force on the follower, ``sqrt(Nx^2 + Ny^2)`` [N].
+- ``residual``: ``alpha - alpha_rigid`` per follower, ``alpha_rigid`` the angle of rigid
+  contact at the sample's cam angle (in follower 2's frame ``Theta - phi``) of that
+  follower's own system on a rigid pivot (:func:`camdyn.model.geometry.rigid_angles`):
+  its rms about zero and its peak-to-peak [rad], as the rocking sweep's.
+- ``spectrum``: per follower, the amplitudes of the first ``harmonics`` cam harmonics of
+  ``alpha_ddot`` [rad/s^2] and the frequency [Hz] and amplitude of the largest peak above
+  0 Hz, as ``camdyn spectrum`` finds them on the run
+  (:func:`camdyn.analysis.spectra.follower_series`, then
+  :func:`camdyn.analysis.harmonics.harmonic_amplitudes` and the Hann-windowed
+  :func:`camdyn.analysis.harmonics.amplitude_spectrum`) over the last whole cam turns of
+  the window: all ``kept`` at a constant cam speed, else as many as it holds.
+- ``stick_slip`` (two followers): per follower, the sticks, slips (break-aways) and
+  sprags of the run's event log at or after the window's first sample, per cam
+  revolution of the window [1/rev]; NaN where the log ran out of room (the run's
+  ``events_dropped`` attribute: the log holds 64 + 16 events per period of the starting
+  speed).
 """
 
 from __future__ import annotations
@@ -41,7 +57,7 @@ __all__ = ["variables", "point_metrics", "stack", "FOLLOWERS"]
 FOLLOWERS = {"driven-cam": 1, "flexible-pivot": 1, "two-followers": 2}
 
 
-def variables(kind: str, metrics, kept: int) -> dict:
+def variables(kind: str, metrics, kept: int, harmonics: int = 10) -> dict:
     """name -> (extra dimensions, their sizes, dtype, units, long name) of each result
     variable of a sweep over a ``kind`` mechanism (per-follower ones over ``follower``)."""
     each = (("follower",), (2,)) if FOLLOWERS[kind] == 2 else ((), ())
@@ -63,21 +79,39 @@ def variables(kind: str, metrics, kept: int) -> dict:
         out["mean_cam_speed"] = ((), (), "f8", "rad/s", "mean cam speed")
     if "bearing_force" in metrics:
         out["peak_bearing_force"] = ((), (), "f8", "N", "largest sampled force of the bearing on the follower")
+    if "residual" in metrics:
+        out["residual_rms"] = (*each, "f8", "rad", "rms of the residual response alpha - alpha_rigid")
+        out["residual_peak_to_peak"] = (*each, "f8", "rad", "peak-to-peak of the residual response")
+    if "spectrum" in metrics:
+        dims, sizes = each[0] + ("harmonic",), each[1] + (harmonics,)
+        out["harmonic_amplitude"] = (dims, sizes, "f8", "rad/s^2", "amplitude of alpha_ddot at the cam harmonics")
+        out["peak_frequency"] = (*each, "f8", "Hz", "frequency of the largest spectral peak of alpha_ddot")
+        out["peak_amplitude"] = (*each, "f8", "rad/s^2", "amplitude of the largest spectral peak of alpha_ddot")
+    if "stick_slip" in metrics:
+        for name in ("sticks", "slips", "sprags"):
+            out[f"{name}_per_revolution"] = (*each, "f8", "1/rev", f"{name} of the contact per cam revolution")
     return out
 
 
+def _from(values: np.ndarray, start: int) -> np.ndarray:
+    """The samples from the one before the window's first (index ``start``) on; with no
+    sample before it (nothing discarded) the first one stands in for it."""
+    return values[start - 1:] if start > 0 else np.concatenate([values[:1], values])
+
+
 def _channels(ds, kind: str, start: int) -> dict:
-    """The window's channels as arrays (samples, followers) (cam ones (samples,))."""
+    """The window's channels as arrays (samples, followers) (cam ones (samples,)), from
+    the sample before the window on."""
     def per(name):
-        values = ds[name].values[start - 1:]
+        values = _from(ds[name].values, start)
         return values if values.ndim == 2 else values[:, None]
     out = {name: per(name) for name in ("alpha", "alpha_dot", "Fn", "in_contact", "cam_work")}
     if "sliding_velocity" in ds:
         out["sliding_velocity"] = per("sliding_velocity")
-    out["cam_angle"] = ds["cam_angle"].values[start - 1:]
+    out["cam_angle"] = _from(ds["cam_angle"].values, start)
     out["cam_start"] = float(ds["cam_angle"].values[0])
     if kind != "flexible-pivot":
-        out["cam_speed"] = ds["cam_speed"].values[start - 1:]
+        out["cam_speed"] = _from(ds["cam_speed"].values, start)
     else:
         out["bearing"] = np.hypot(ds["Nx"].values[start:], ds["Ny"].values[start:])
     return out
@@ -115,8 +149,11 @@ def _section(ch: dict, kind: str, kept: int, samples: int) -> tuple[np.ndarray, 
     return out, scale
 
 
-def point_metrics(ds, kind: str, metrics, revolutions: int, discard: int, samples: int) -> dict:
-    """The metrics of one run (see the module docstring): name -> value or array."""
+def point_metrics(ds, kind: str, metrics, revolutions: int, discard: int, samples: int, mechanism=None,
+                  harmonics: int = 10) -> dict:
+    """The metrics of one run (see the module docstring): name -> value or array
+    (``mechanism``, the run's :class:`~camdyn.io.mechanism_config.Mechanism`, for
+    ``residual``)."""
     kept = revolutions - discard
     start = discard * samples
     ch = _channels(ds, kind, start)
@@ -149,7 +186,58 @@ def point_metrics(ds, kind: str, metrics, revolutions: int, discard: int, sample
         out["mean_cam_speed"] = mean
     if "bearing_force" in metrics:
         out["peak_bearing_force"] = float(np.max(ch["bearing"]))
+    if "residual" in metrics:
+        residual = ch["alpha"][1:] - _rigid(ds, mechanism, ch["cam_angle"][1:])
+        out["residual_rms"] = squeeze(np.sqrt(np.mean(residual * residual, axis=0)))
+        out["residual_peak_to_peak"] = squeeze(np.ptp(residual, axis=0))
+    if "spectrum" in metrics:
+        whole = kept if kind == "flexible-pivot" or np.ptp(ch["cam_speed"]) == 0.0 else int(np.floor(turns + 1e-9))
+        rows = [_spectrum(ds, k, whole, harmonics) for k in range(1, FOLLOWERS[kind] + 1)]
+        out["harmonic_amplitude"] = squeeze(np.array([r[0] for r in rows]))
+        out["peak_frequency"] = squeeze(np.array([r[1] for r in rows]))
+        out["peak_amplitude"] = squeeze(np.array([r[2] for r in rows]))
+    if "stick_slip" in metrics:
+        t0 = float(ds["time"].values[start])
+        late = ds["transition_time"].values >= t0
+        who = ds["transition_follower"].values[late]
+        what = ds["transition_kind"].values[late]
+        for name, event in (("sticks", "stick"), ("slips", "slip"), ("sprags", "sprag")):
+            counts = np.array([np.count_nonzero((who == k) & (what == event)) for k in (1, 2)], dtype=float)
+            out[f"{name}_per_revolution"] = counts / turns if not ds.attrs.get("events_dropped") else counts * np.nan
     return out
+
+
+def _rigid(ds, mechanism, thetas: np.ndarray) -> np.ndarray:
+    """Rigid-contact follower angles [rad] (samples, followers) at the cam angles
+    ``thetas`` [rad], of each follower's system on a rigid pivot in its own frame."""
+    from camdyn.model import layout as L
+    from camdyn.model.equilibrium import touch_angle
+    from camdyn.model.geometry import rigid_angles
+
+    systems = [mechanism.system]
+    if FOLLOWERS[mechanism.spec.kind] == 2:
+        systems.append(mechanism.second or mechanism.system)
+    columns = []
+    for i, system in enumerate(systems):
+        frame = thetas - (float(ds.attrs["placement"]) if i == 1 else 0.0)
+        p = L.pack(system, initial_angle=0.0)
+        columns.append(rigid_angles(np.ascontiguousarray(frame), p, touch_angle(p, float(frame[0]))))
+    return np.stack(columns, axis=1)
+
+
+def _spectrum(ds, follower: int, window: int, harmonics: int) -> tuple[np.ndarray, float, float]:
+    """Follower ``follower``'s cam-harmonic amplitudes [rad/s^2], largest peak's frequency
+    [Hz] and amplitude [rad/s^2] over the last ``window`` whole cam turns (NaN for none)."""
+    from camdyn.analysis.harmonics import amplitude_spectrum, harmonic_amplitudes
+    from camdyn.analysis.spectra import follower_series
+
+    if window < 1:
+        return np.full(harmonics, np.nan), np.nan, np.nan
+    series = follower_series(ds, follower if "follower" in ds.dims else None, window)
+    amplitudes = harmonic_amplitudes(series, "alpha_ddot", range(1, harmonics + 1), revolutions=window)
+    freq, amp = amplitude_spectrum(series, "alpha_ddot", revolutions=window)
+    peak = 1 + int(np.argmax(amp[1:]))
+    return amplitudes, float(freq[peak]), float(amp[peak])
 
 
 def _regime(ch: dict, section: np.ndarray, scale: np.ndarray, contact: np.ndarray,
@@ -165,10 +253,10 @@ def _regime(ch: dict, section: np.ndarray, scale: np.ndarray, contact: np.ndarra
     return (2 if period > 0 else 3), period
 
 
-def stack(rows: list, kind: str, metrics, kept: int) -> dict:
+def stack(rows: list, kind: str, metrics, kept: int, harmonics: int = 10) -> dict:
     """One array per variable over a chunk's points (None rows: failed, NaN; regime -1)."""
     out = {}
-    for name, (_, sizes, dtype, _, _) in variables(kind, metrics, kept).items():
+    for name, (_, sizes, dtype, _, _) in variables(kind, metrics, kept, harmonics).items():
         fill = {"f8": np.nan, "i1": -1, "i2": 0}[dtype]
         array = np.full((len(rows),) + tuple(sizes), fill, dtype=dtype)
         for i, row in enumerate(rows):

@@ -50,7 +50,7 @@ def prepare_chunk(spec, chunk: int) -> dict:
 
 def run_args(spec, prepared: dict) -> tuple:
     """Arguments of :func:`run_chunk` for a prepared chunk."""
-    run = (spec.revolutions, spec.discard, spec.samples_per_revolution, spec.rtol)
+    run = (spec.revolutions, spec.discard, spec.samples_per_revolution, spec.rtol, spec.harmonics)
     return prepared["mechanisms"], run, spec.mechanism, tuple(spec.metrics)
 
 
@@ -62,8 +62,9 @@ def run_chunk(mechanisms: list, run: tuple, kind: str, metrics) -> dict:
     mechanisms : list
         :class:`~camdyn.io.mechanism_config.Mechanism` per point, None for a refused one.
     run : tuple
-        ``(revolutions, discard, samples_per_revolution, rtol)``: periods of the starting
-        cam speed simulated and discarded [-], samples per period [-], relative tolerance [-].
+        ``(revolutions, discard, samples_per_revolution, rtol, harmonics)``: periods of the
+        starting cam speed simulated and discarded [-], samples per period [-], relative
+        tolerance [-], cam harmonics kept by the ``spectrum`` metric [-].
     kind : str
         The mechanism kind.
     metrics : sequence of str
@@ -78,7 +79,7 @@ def run_chunk(mechanisms: list, run: tuple, kind: str, metrics) -> dict:
     """
     from camdyn.io.mechanism_config import simulate_mechanism
 
-    revolutions, discard, samples, rtol = run
+    revolutions, discard, samples, rtol, harmonics = run
     rows, failure = [], []
     counters = np.zeros((len(mechanisms), 3), dtype=np.int64)
     for i, mechanism in enumerate(mechanisms):
@@ -87,13 +88,13 @@ def run_chunk(mechanisms: list, run: tuple, kind: str, metrics) -> dict:
             try:
                 ds = simulate_mechanism(mechanism, revolutions=revolutions,
                                         sample_rate=sample_rate(mechanism, samples), rtol=rtol)
-                row = MM.point_metrics(ds, kind, metrics, revolutions, discard, samples)
+                row = MM.point_metrics(ds, kind, metrics, revolutions, discard, samples, mechanism, harmonics)
                 counters[i] = [ds.attrs["accepted_steps"], ds.attrs["rejected_steps"], ds.attrs["events"]]
             except CamdynError as exc:
                 reason = f"{type(exc).__name__}: {exc}"
         rows.append(row)
         failure.append(reason)
-    out = MM.stack(rows, kind, metrics, revolutions - discard)
+    out = MM.stack(rows, kind, metrics, revolutions - discard, harmonics)
     out["solver_failure"] = np.array(failure, dtype=str)
     out["accepted_steps"] = counters[:, 0]
     out["rejected_steps"] = counters[:, 1]

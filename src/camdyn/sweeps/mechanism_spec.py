@@ -43,12 +43,18 @@ MECHANISM_METRICS = {
     "regime": "contact kept / sliding reversal / periodic impacts / irregular impacts, and the Poincare period",
     "speed_fluctuation": "the cam speed's coefficient of fluctuation (max - min) / mean [-] and its mean [rad/s]",
     "bearing_force": "largest sampled force of the flexible pivot's bearing on the follower [N]",
+    "residual": "rms and peak-to-peak of alpha - alpha_rigid (rigid contact on a rigid pivot at the sample's cam "
+                "angle), per follower [rad]",
+    "spectrum": "cam-harmonic amplitudes of alpha_ddot [rad/s^2] and the largest spectral peak, per follower, as "
+                "camdyn spectrum finds them",
+    "stick_slip": "sticks, slips (break-aways) and sprags of the event log per cam revolution, per follower [1/rev]",
 }
 #: the metrics of each mechanism kind (its default list)
 KIND_METRICS = {
-    "driven-cam": ("impacts", "max_force", "poincare", "regime", "speed_fluctuation"),
-    "flexible-pivot": ("impacts", "max_force", "poincare", "regime", "bearing_force"),
-    "two-followers": ("impacts", "max_force", "poincare", "regime", "speed_fluctuation"),
+    "driven-cam": ("impacts", "max_force", "poincare", "regime", "speed_fluctuation", "residual", "spectrum"),
+    "flexible-pivot": ("impacts", "max_force", "poincare", "regime", "bearing_force", "residual", "spectrum"),
+    "two-followers": ("impacts", "max_force", "poincare", "regime", "speed_fluctuation", "residual", "spectrum",
+                      "stick_slip"),
 }
 _PREFIXES = ("second.system.", "system.")
 

@@ -379,7 +379,7 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
         over = f" over a {kind} mechanism" if kind else ""
         raise ParameterError(f"sweep spec: [metrics] names: unknown metric(s){over} {unknown}; choose from {allowed}")
     harmonics = int(_number("metrics", "harmonics", met.get("harmonics", 10), integer=True))
-    if not kind and 2 * harmonics >= samples:
+    if 2 * harmonics >= samples:
         raise ParameterError(f"sweep spec: {harmonics} harmonics need samples_per_revolution > {2 * harmonics}")
 
     out = _table(spec, "output", {"path"})

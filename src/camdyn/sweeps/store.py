@@ -225,7 +225,7 @@ def _layout(spec: SweepSpec) -> dict:
     :func:`camdyn.sweeps.mechanism_metrics.variables` for a sweep over a mechanism)."""
     if spec.mechanism:
         from camdyn.sweeps import mechanism_metrics
-        return mechanism_metrics.variables(spec.mechanism, spec.metrics, spec.kept_revolutions)
+        return mechanism_metrics.variables(spec.mechanism, spec.metrics, spec.kept_revolutions, spec.harmonics)
     return M.variables(spec.metrics, spec.harmonics, spec.kept_revolutions)
 
 
