@@ -143,3 +143,15 @@ def check_run(counters, what: str) -> None:
         raise KeyboardInterrupt
     if status != driver.STATUS_OK:
         raise SimulationError(f"{what} {driver.STATUS_MESSAGES[status]}")
+
+
+def with_room_for_events(run, max_events: int):
+    """``run(max_events)`` (a compiled run whose result ends with the driver's counters),
+    again with room for every event it counted if its event log ran out of room: the
+    driver applies an event past the log's room but does not log it, and the run is
+    deterministic, so the second run takes the same steps and logs them all."""
+    result = run(int(max_events))
+    counters = result[-1]
+    if int(counters[driver.COUNT_EVENTS_DROPPED]) > 0 and int(counters[driver.COUNT_STATUS]) == driver.STATUS_OK:
+        result = run(int(counters[driver.COUNT_EVENTS]) + 16)
+    return result

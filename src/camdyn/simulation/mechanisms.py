@@ -143,9 +143,9 @@ def _run_counters(system_id, p, y0, duration, sample_rate, period, rtol, atol, m
         max_step = default_max_step(period, duration)
     max_events = int(64 + 16 * (duration / period if math.isfinite(period) else 100))
     start = _time.perf_counter()
-    y, modes, events, counters = driver.integrate(system_id, p, y0, 0.0, float(duration), t_out, float(rtol),
-                                                  float(atol), float(max_step), METHODS[method], 50_000_000,
-                                                  max_events, True)
+    y, modes, events, counters = limits.with_room_for_events(
+        lambda room: driver.integrate(system_id, p.copy(), y0, 0.0, float(duration), t_out, float(rtol), float(atol),
+                                      float(max_step), METHODS[method], 50_000_000, room, True), max_events)
     elapsed = _time.perf_counter() - start
     limits.check_run(counters, "simulation")
     return t_out, y, modes, events, counters, elapsed

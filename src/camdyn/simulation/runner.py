@@ -231,9 +231,10 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
         max_step = default_max_step(period, duration)
     max_events = int(64 + 16 * (duration / period if math.isfinite(period) else 100))
     start = _time.perf_counter()
-    y, modes, events, counters = driver.integrate(
-        systems.CAM_FOLLOWER, prep.p, y0, 0.0, float(duration), t_out, float(rtol), float(atol),
-        float(max_step), METHODS[method], int(max_steps), max_events, True)
+    y, modes, events, counters = limits.with_room_for_events(
+        lambda room: driver.integrate(systems.CAM_FOLLOWER, prep.p.copy(), y0, 0.0, float(duration), t_out, float(rtol),
+                                      float(atol), float(max_step), METHODS[method], int(max_steps), room, True),
+        max_events)
     elapsed = _time.perf_counter() - start
     status = int(counters[driver.COUNT_STATUS])
     if status == driver.STATUS_INTERRUPTED:
