@@ -89,6 +89,11 @@ def simulate_points(params, starts, periods, revolutions, discard, samples, rtol
         y, modes, events, count = driver.integrate(
             systems.CAM_FOLLOWER, p, starts[i], 0.0, t_end, t_out, rtol, atol, period / 32.0,
             driver.METHOD_AUTO, max_steps, max_events)
+        if count[driver.COUNT_EVENTS_DROPPED] > 0 and count[driver.COUNT_STATUS] == driver.STATUS_OK:
+            # the log ran out of room: the same run again, with room for every event
+            y, modes, events, count = driver.integrate(
+                systems.CAM_FOLLOWER, p, starts[i], 0.0, t_end, t_out, rtol, atol, period / 32.0,
+                driver.METHOD_AUTO, max_steps, count[driver.COUNT_EVENTS] + 16)
         counters[i, :] = count
         if count[driver.COUNT_STATUS] != driver.STATUS_OK:
             continue
