@@ -264,17 +264,18 @@ def main():
                         help="atol = 1e-3 rtol in every state, or scaled by each state's size")
     parser.add_argument("--vector", action="store_true", help="give camdyn's core the per-state atol too")
     parser.add_argument("--budget", type=float, default=20.0, help="CPU seconds past which a tool stops [s]")
+    parser.add_argument("--tools", nargs="*", help="run only the tools whose names are given (default: all)")
     parser.add_argument("--out", type=Path, help="JSON file (default benchmarks/flexible_pivot.json)")
     args = parser.parse_args()
     revolutions, rtols, rounds = (3, QUICK_RTOLS, 1) if args.quick else (REVOLUTIONS, RTOLS, 3)
     out = args.out or (Path(tempfile.gettempdir()) / "flexible_pivot-quick.json" if args.quick
                        else HERE / "flexible_pivot.json")
+    runners = {name: run for name, run in tools(args.vector).items() if not args.tools or name in args.tools}
     results = {"machine": machine(), "versions": versions(), "revolutions": revolutions,
                "settings": {"rtols": list(rtols), "rounds": rounds, "sample_rate_hz": SAMPLE_RATE,
                             "atol": args.atol, "camdyn_atol_per_state": args.vector, "reference": REFERENCE,
-                            "budget_cpu_s": args.budget, "timer": "time.process_time"},
+                            "budget_cpu_s": args.budget, "timer": "time.process_time", "tools": list(runners)},
                "models": {}}
-    runners = tools(args.vector)
     for name, flexible in (("rigid", False), ("flexible", True)):
         model = Model(name, flexible, revolutions, args.atol)
         results["models"][name] = {"states": model.states, "alpha_scale_rad": model.scale,
