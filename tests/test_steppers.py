@@ -253,3 +253,29 @@ def test_dop853_error_norm_of_an_exact_step_with_an_underflowing_third_order_est
     # the plain norm is the fifth-order estimate's rms, |h| sqrt(e5 / n), never below Hairer's
     plain = dop853_error_norm(y, y, err5, err3, 1e-3, 0.0, 1e-9, 2, True)
     assert plain == pytest.approx(1e-3 * np.sqrt(e5 / 2), rel=1e-12) and plain >= expected
+
+
+# --- absolute tolerances per component -----------------------------------------------------------
+
+def test_an_absolute_tolerance_per_component():
+    # the error norms read atol[i] for component i when atol is an array: the same norm as
+    # one number when every entry is that number, and the RMS of err_i / (atol_i + rtol |y_i|)
+    # written out here otherwise
+    y0, y1, err = np.array([0.5, -2.0]), np.array([0.6, -2.5]), np.array([3e-9, 4e-7])
+    assert error_norm(y0, y1, err, 1e-6, np.array([1e-9, 1e-9]), 2) == error_norm(y0, y1, err, 1e-6, 1e-9, 2)
+    by_hand = math.sqrt(((3e-9 / (1e-9 + 0.6e-6)) ** 2 + (4e-7 / (1e-5 + 2.5e-6)) ** 2) / 2)
+    assert error_norm(y0, y1, err, 1e-6, np.array([1e-9, 1e-5]), 2) == pytest.approx(by_hand, rel=1e-14)
+    # the driver: an array of equal entries runs bitwise the run of one number; loosening the
+    # velocity's atol a thousandfold (rtol 0, so that atol alone sets the tolerance) takes
+    # fewer steps, and the position's error stays within 5 of its own atol as the velocity's
+    # error grows
+    t_out = np.linspace(0.0, 5.0, 51)
+    ref = np.array([exact(t, Y0) for t in t_out])
+    runs = {}
+    for name, atol in (("number", 1e-9), ("equal", np.full(3, 1e-9)), ("loose", np.array([1e-9, 1e-6, 1e-9]))):
+        runs[name] = driver.integrate(OSC, P, Y0, 0.0, 5.0, t_out, 0.0, atol, 1.0, driver.METHOD_DOP853, 10 ** 6, 100)
+        assert runs[name][3][driver.COUNT_STATUS] == driver.STATUS_OK
+    assert np.array_equal(runs["number"][0], runs["equal"][0]) and np.array_equal(runs["number"][3], runs["equal"][3])
+    assert runs["loose"][3][driver.COUNT_ACCEPTED] < runs["number"][3][driver.COUNT_ACCEPTED]
+    assert np.max(np.abs(runs["loose"][0][:, 0] - ref[:, 0])) < 5e-9
+    assert np.max(np.abs(runs["loose"][0][:, 1] - ref[:, 1])) > np.max(np.abs(runs["number"][0][:, 1] - ref[:, 1]))

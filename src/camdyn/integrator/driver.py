@@ -370,8 +370,11 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
         Time span [s].
     t_out : ndarray
         Increasing output times [s] within the span.
-    rtol, atol : float
-        Relative and absolute tolerances of the local error.
+    rtol : float
+        Relative tolerance of the local error [-].
+    atol : float or ndarray
+        Absolute tolerance of the local error, one number for every component or one per
+        component of the state (``camdyn.integrator.tolerances``) [the components' units].
     h_max : float
         Largest step [s].
     method : int

@@ -38,6 +38,7 @@ import numba
 import numpy as np
 from numpy.polynomial import polynomial as P
 
+from camdyn.integrator.tolerances import absolute_tolerance
 from camdyn.systems import registry as systems
 
 #: Largest order [-].
@@ -102,10 +103,11 @@ KEEP = np.array([(1.0 / THRESHOLD - 1e-6) ** (q + 1) for q in range(MAX_ORDER + 
 
 @numba.njit(cache=True, inline="always")
 def _norm(v, y, rtol, atol, controlled):
-    """RMS of ``v`` over the controlled components, scaled by ``atol + rtol |y|``."""
+    """RMS of ``v`` over the controlled components, scaled by ``atol + rtol |y|``
+    (``atol`` one number or one per component)."""
     acc = 0.0
     for i in range(controlled):
-        acc += (v[i] / (atol + rtol * abs(y[i]))) ** 2
+        acc += (v[i] / (absolute_tolerance(atol, i) + rtol * abs(y[i]))) ** 2
     return math.sqrt(acc / controlled)
 
 

@@ -66,16 +66,17 @@ from camdyn.integrator.tableaus import (
     RB_M,
     RB_STAGES,
 )
+from camdyn.integrator.tolerances import absolute_tolerance
 from camdyn.systems import registry as systems
 
 
 @numba.njit(cache=True)
 def error_norm(y0, y1, err, rtol, atol, controlled):
     """RMS of the error over the first ``controlled`` components, scaled by
-    ``atol + rtol |y|``."""
+    ``atol + rtol |y|`` (``atol`` one number or one per component)."""
     acc = 0.0
     for i in range(controlled):
-        sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
+        sc = absolute_tolerance(atol, i) + rtol * max(abs(y0[i]), abs(y1[i]))
         acc += (err[i] / sc) ** 2
     return math.sqrt(acc / controlled)
 
@@ -300,7 +301,7 @@ def dop853_error_norm(y0, y1, err5, err3, h, rtol, atol, controlled, plain):
     e5 = 0.0
     e3 = 0.0
     for i in range(controlled):
-        sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
+        sc = absolute_tolerance(atol, i) + rtol * max(abs(y0[i]), abs(y1[i]))
         e5 += (err5[i] / sc) ** 2
         e3 += (err3[i] / sc) ** 2
     if plain:
