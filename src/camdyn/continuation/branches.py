@@ -284,7 +284,9 @@ def _tests(point: _Point) -> dict:
 
 def _locate(job: _Continuation, a: _Point, b: _Point, kind: str, max_iterations: int = 60) -> _Point | None:
     """The point between ``a`` and ``b`` where test ``kind`` vanishes (or, for grazing,
-    where the impact count changes), along the arclength from ``a``. Where the corrector
+    where the impact count changes), along the arclength from ``a``, until the bracket is
+    below 1e-12 of the arclength (grazing: the corrector's tolerance, as the impact count
+    comes from the variational run, at ``matrix_rtol``). Where the corrector
     fails inside the bracket (near grazing it may), the last point it reached stands for
     the bifurcation, less accurately."""
     s_b = float(a.tangent @ (b.z - a.z))
@@ -296,10 +298,9 @@ def _locate(job: _Continuation, a: _Point, b: _Point, kind: str, max_iterations:
         return _tests(point)[kind]
 
     f_lo, f_hi = value(a), value(b)
-    side = 0
-    best = b
+    side, best, width = 0, b, (job.tolerance if kind == "grazing" else 1e-12) * (1.0 + abs(s_b))
     for _ in range(max_iterations):
-        if abs(hi[0] - lo[0]) < 1e-12 * (1.0 + abs(s_b)):
+        if abs(hi[0] - lo[0]) < width:
             break
         if kind == "grazing":
             s = 0.5 * (lo[0] + hi[0])
