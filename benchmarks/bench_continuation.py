@@ -21,7 +21,12 @@ against the 400-speed brute-force diagram from 5 to 30 Hz (300 revolutions each,
 discarded, as ``camdyn bifurcation`` and benchmarks/bench_sweep.py run it) on 2 local
 workers (their CPU time from ``getrusage``).
 
-Usage:  python benchmarks/bench_continuation.py [--repeat N] [--skip-sweep]   (writes benchmarks/continuation.json)
+With ``--workers 2`` the segments and windows run in two processes, as the sweep does:
+the wall time is then that of the two, and the CPU time both the sum of the items' own
+and the processes' whole (their start and compilation included).
+
+Usage:  python benchmarks/bench_continuation.py [--repeat N] [--skip-sweep] [--workers N]
+        (writes benchmarks/continuation.json)
 """
 
 from __future__ import annotations
@@ -152,19 +157,54 @@ WINDOWS = [(7.28, 1, 7.25, 7.32, {"step": 0.002, "max_step": 0.01, "max_points":
            (19.6, 4, 19.5, 19.7, {"max_step": 0.005}), (19.7, 6, 19.6, 19.8, {})]
 
 
-def chapter3(skip_sweep: bool) -> dict:
-    import resource
+#: The seven segments of the chapter 3 rig (from, to [Hz], settings), as in the docs' table.
+SEGMENTS = [(5.0, 30.0, {}), (8.2, 7.85, {}), (8.2, 8.5, {}), (14.0, 9.5, {}), (14.0, 17.45, {"levels": 2}),
+            (24.0, 20.9, {"periods": 2}), (24.0, 28.6, {"periods": 2})]
+_SYSTEM = []
 
+
+def _warm() -> None:
+    """Load the chapter 3 rig and compile (or load from the cache) what continuation runs."""
     from camdyn.continuation.results import trace_branch
-    system = camdyn.load_system("sundar2014-impact")
-    trace_branch(system, "motion.speed", 5.0, 5.5, transient=50, max_points=3)        # compiled once
-    out = {"segments": [_segment(system, 5.0, 30.0), _segment(system, 8.2, 7.85), _segment(system, 8.2, 8.5),
-                        _segment(system, 14.0, 9.5), _segment(system, 14.0, 17.45, levels=2),
-                        _segment(system, 24.0, 20.9, periods=2), _segment(system, 24.0, 28.6, periods=2)]}
-    out["windows"] = [_window(system, speed, periods, down, up, **settings)
-                      for speed, periods, down, up, settings in WINDOWS]
-    out["total_wall_s"] = sum(item["wall_s"] for item in out["segments"] + out["windows"])
-    out["total_cpu_s"] = sum(item["cpu_s"] for item in out["segments"] + out["windows"])
+    if not _SYSTEM:
+        _SYSTEM.append(camdyn.load_system("sundar2014-impact"))
+        trace_branch(_SYSTEM[0], "motion.speed", 5.0, 5.5, transient=50, max_points=3)
+
+
+def _job(job: tuple) -> dict:
+    """One segment (``("segment", first, last, settings)``) or window (``("window", speed,
+    periods, down, up, settings)``) of the chapter 3 rig, in this process."""
+    _warm()
+    kind, *args, settings = job
+    return (_segment if kind == "segment" else _window)(_SYSTEM[0], *args, **settings)
+
+
+def chapter3(skip_sweep: bool, workers: int = 1) -> dict:
+    """The chapter 3 rig's segments and windows, in this process (``workers`` 1) or spread
+    over ``workers`` processes (each item's CPU time measured in its process, and the
+    processes' whole CPU time from ``getrusage``, their start and compilation included),
+    then the brute-force sweep on 2 workers."""
+    import resource
+    from concurrent.futures import ProcessPoolExecutor
+
+    jobs = [("segment", first, last, settings) for first, last, settings in SEGMENTS]
+    jobs += [("window", speed, periods, down, up, settings) for speed, periods, down, up, settings in WINDOWS]
+    if workers == 1:
+        _warm()
+        t = time.perf_counter()
+        results = [_job(job) for job in jobs]
+        out = {"workers": 1, "wall_s": time.perf_counter() - t}
+    else:
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t = time.perf_counter()
+        with ProcessPoolExecutor(max_workers=workers, initializer=_warm) as pool:
+            results = list(pool.map(_job, jobs))
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        out = {"workers": workers, "wall_s": time.perf_counter() - t,
+               "workers_cpu_s": (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)}
+    out["segments"], out["windows"] = results[:len(SEGMENTS)], results[len(SEGMENTS):]
+    out["total_wall_s"] = sum(item["wall_s"] for item in results)
+    out["total_cpu_s"] = sum(item["cpu_s"] for item in results)
     if not skip_sweep:
         from camdyn.sweeps import run_sweep, spec_from_dict
         with tempfile.TemporaryDirectory() as folder:
@@ -186,10 +226,12 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--repeat", type=int, default=7)
     parser.add_argument("--skip-sweep", action="store_true")
+    parser.add_argument("--workers", type=int, default=1,
+                        help="processes for the chapter 3 segments and windows (default 1: this process)")
     parser.add_argument("--out", default=str(HERE / "continuation.json"))
     args = parser.parse_args()
     result = {"machine": platform.machine(), "python": platform.python_version(), "camdyn": camdyn.__version__,
-              "one_orbit": one_orbit(args.repeat), "chapter3_5_to_30_Hz": chapter3(args.skip_sweep)}
+              "one_orbit": one_orbit(args.repeat), "chapter3_5_to_30_Hz": chapter3(args.skip_sweep, args.workers)}
     Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
     print(json.dumps(result, indent=1))
 

@@ -149,3 +149,32 @@ def test_doubled_orbit_refuses_a_point_that_is_not_a_period_doubling(period_one)
         switch_branch(problem, Bifurcation("fold", doubling.parameter, doubling.orbit), 2.75)
     with pytest.raises(ParameterError, match="amplitude"):
         doubled_orbit(problem, doubling.orbit, amplitude=0.0)
+
+
+def test_switch_whose_newton_steps_stop_contracting_ends_at_its_third_step(period_one, monkeypatch):
+    """Newton's method for the first period-2 orbit stops as soon as its steps stop
+    contracting (from the third step on, one not shorter than 0.8 of the one before), after
+    three variational runs, instead of running its 30 iterations: here the residual's
+    plain run is offset by +-1e-4 m alternately, so that no iterate can converge."""
+    from camdyn.continuation import switching
+    from camdyn.errors import SimulationError
+    problem, doubling = period_one
+    calls = {"flow": 0, "shoot": 0}
+    flow, shoot = switching.flow, switching.shoot
+
+    def counted_flow(*args, **kwargs):
+        calls["flow"] += 1
+        return flow(*args, **kwargs)
+
+    def offset_shoot(problem, x, value, periods=1):
+        calls["shoot"] += 1                 # per iteration: value + h, value - h, then the residual's run
+        end = shoot(problem, x, value, periods)
+        if calls["shoot"] % 3 == 0:
+            end = end + np.array([1e-4, 0.0]) * (-1) ** (calls["shoot"] // 3)
+        return end
+
+    monkeypatch.setattr(switching, "flow", counted_flow)
+    monkeypatch.setattr(switching, "shoot", offset_shoot)
+    with pytest.raises(SimulationError, match="diverged"):
+        doubled_orbit(problem, doubling.orbit)
+    assert calls["flow"] == 3, calls

@@ -1,7 +1,7 @@
 """The ends of a branch of periodic orbits where the corrector fails next to a loss of
 contact or a grazing: the bifurcation placed at the zero of the secant through the last
 two points' contact margin (the smallest normal force, the smallest guard value), as
-``(kind, parameter, orbit)``."""
+``(kind, parameter, orbit)``; and the check that refuses a step over both at once."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import math
 
 from camdyn.continuation.orbits import Orbit
 
-__all__ = ["END_FRACTION", "contact_loss_end", "flight_grazing_end", "grazing_end"]
+__all__ = ["END_FRACTION", "contact_loss_end", "flight_grazing_end", "grazing_end", "jumped_off_contact"]
 
 #: A branch that ends with its last orbit's contact margin (the smallest guard value, the
 #: smallest normal force) below this fraction of the margin's largest along the branch
@@ -71,3 +71,13 @@ def _secant_end(kind: str, orbits: list[Orbit], margins: list[float]) -> list[tu
     if abs(zero - b.parameter) > abs(b.parameter - a.parameter) and not mb < END_FRACTION * largest:
         return []
     return [(kind, zero, b)]
+
+
+def jumped_off_contact(last: Orbit, new: Orbit) -> bool:
+    """Whether a step went from a cam-follower orbit in contact (no impact, smallest
+    unclipped normal force above zero) straight to an impacting orbit: past a loss of
+    contact the force's zero comes first, the first impact later, at a grazing (chapter 3
+    rig: 6.9070915 and 6.9071053 Hz), and a step over both was bisected across them, up
+    to 4e-3 Hz early; shorter steps pass them one at a time."""
+    return (last.impacts_per_period == 0 and new.impacts_per_period > 0
+            and math.isfinite(last.force_minimum) and last.force_minimum > 0)
