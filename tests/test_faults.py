@@ -478,7 +478,10 @@ def test_ctrl_c_stops_an_inline_sweep_at_once(tmp_path):
 def test_interrupt_during_start_up_is_still_one_line(tmp_path, sig, status, delay):
     # several moments inside the imports: Ctrl-C there once ended in a death by SIGINT
     # (status -2) in about one try in five
-    proc = _start(["simulate", "sundar2014-impact", "--revolutions", "5000"], tmp_path)
+    # 5000 revolutions at 2 kHz: a result of about 135 MB, below the large-result warning
+    # (at 20 kHz, 1350 MB: on a machine whose imports end within 1.1 s the warning came
+    # before the interrupt, a second line)
+    proc = _start(["simulate", "sundar2014-impact", "--revolutions", "5000", "--sample-rate", "2kHz"], tmp_path)
     time.sleep(delay)    # inside the imports (or, on a fast machine, the integration)
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)
