@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numba
 
-from camdyn.integrator.steppers import dense
+from camdyn.integrator.steppers import KIND_DOP853, dense, dop853_dense
 
 
 @numba.njit(cache=True)
@@ -13,7 +13,10 @@ def sample(t, h, t_stop, i_out, t_out, y0, f0, y1, f1, work, kind, mode, scratch
     """Fill the output times in (t, t_stop] of the current step; return the next index."""
     n_out = t_out.shape[0]
     while i_out < n_out and t_out[i_out] <= t_stop:
-        dense((t_out[i_out] - t) / h, h, y0, f0, y1, f1, work, kind, scratch)
+        if kind == KIND_DOP853:
+            dop853_dense((t_out[i_out] - t) / h, y0, work, scratch)
+        else:
+            dense((t_out[i_out] - t) / h, h, y0, f0, y1, f1, work, kind, scratch)
         for i in range(y0.shape[0]):
             y_out[i_out, i] = scratch[i]
         for i in range(mode.shape[0]):

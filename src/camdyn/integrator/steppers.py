@@ -100,6 +100,19 @@ KIND_DOP853 = 2
 KIND_NORDSIECK = 3
 
 
+@numba.njit(cache=True, inline="always")
+def dop853_dense(tau, y0, work, out):
+    """State at ``t + tau h`` inside a DOP853 step from its 7th-order extension, whose
+    coefficients :func:`dop853_extend` has put in ``work[0:7]``; compiled into its caller
+    (numba IR inlining: the output samples call it once each, and a call of a function
+    taking arrays costs several times this arithmetic)."""
+    s = 1.0 - tau
+    for i in range(y0.shape[0]):   # nested form: ((F6 x + F5)(1 - x) + F4) x ...
+        acc = ((((((work[6, i] * tau + work[5, i]) * s + work[4, i]) * tau + work[3, i]) * s
+                  + work[2, i]) * tau + work[1, i]) * s + work[0, i]) * tau
+        out[i] = y0[i] + acc
+
+
 @numba.njit(cache=True)
 def dense(tau, h, y0, f0, y1, f1, work, kind, out):
     """State at ``t + tau h`` inside the last step.
@@ -118,11 +131,7 @@ def dense(tau, h, y0, f0, y1, f1, work, kind, out):
         nordsieck_dense(tau, work, n, out)
         return
     if kind == KIND_DOP853:
-        s = 1.0 - tau
-        for i in range(n):   # nested form: ((F6 x + F5)(1 - x) + F4) x ...
-            acc = ((((((work[6, i] * tau + work[5, i]) * s + work[4, i]) * tau + work[3, i]) * s
-                      + work[2, i]) * tau + work[1, i]) * s + work[0, i]) * tau
-            out[i] = y0[i] + acc
+        dop853_dense(tau, y0, work, out)
         return
     t2 = tau * tau
     t3 = t2 * tau
@@ -228,7 +237,7 @@ def rosenbrock_step(system, t, y, f0, h, mode, p, work, stages, matrix, pivots, 
     return calls
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _dop853_stage(system, t, y, h, s, mode, p, k, yt):
     """Stage ``s`` of DOP853 (steps and continuous extension alike) into ``k[s]``, summed
     over the row's nonzero columns only (:data:`camdyn.integrator.tableaus.D8_A_FROM`)."""
