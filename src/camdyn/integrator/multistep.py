@@ -20,19 +20,29 @@ estimate; the rate is kept from step to step and set to 1 with each new matrix),
 when an update grows to twice the last.
 
 **Switching** (``METHOD_MULTISTEP``; after Petzold 1983, SIAM J. Sci. Stat. Comput. 4(1)
-136-148, doi:10.1137/0904010, as LSODA does it). A run starts in the Adams family; every
-:data:`SWITCH_STEPS` accepted steps the step compares the steps either family could take
-next. Each family's step ratio at the current error is ``(6 E)^(-1/(q+1))``, ``E`` the
-error norm of this step translated between the families through their error constants
-per ``h^(q+1) y^(q+1)`` (:data:`camdyn.integrator.nordsieck.DERIVATIVE_ERROR`; from an
-Adams order above 5, BDF's order-5 error is estimated from ``z[6]``). The Adams step is
-also bounded by its region of absolute stability: ``h |lambda| <= S_q`` (LSODA's ``SM1``),
-``|lambda|`` estimated by the Jacobian's norm ``max_i sum_j |J_ij| w_j / w_i`` (``w`` the
-error weights ``atol + rtol |y|``; in the Adams family the Jacobian is evaluated for the
-test, one per :data:`SWITCH_STEPS` steps, and in the BDF family the last one serves).
-Adams switches to BDF when the BDF step would be at least :data:`RATIO` times the Adams
-step, BDF to Adams when the Adams step would be at least as long as the BDF step (Adams
-needs no matrix); the switch keeps the order (at most 5 for BDF) and the history.
+136-148, doi:10.1137/0904010, and LSODA). A run starts in the Adams family; every
+:data:`SWITCH_STEPS` accepted steps the step compares what either family could do next.
+The Adams step is bounded by its region of absolute stability, ``h rho <= S_q`` (LSODA's
+``SM1``), ``rho`` the spectral radius of the Jacobian, estimated by
+:func:`spectral_radius` (in the Adams family the Jacobian is evaluated for the test, one
+per :data:`SWITCH_STEPS` steps; in the BDF family the last one serves). The rule:
+
+- Adams to BDF when the Adams step is held by stability: ``h rho >= S_q / RATIO``. (LSODA
+  also asks that BDF's step, from this step's error translated between the families, be
+  5 times longer; measured on a stiff linear problem, the error estimate of an Adams
+  step held at its stability bound is that of the decaying stiff component, not of the
+  solution, and the translated BDF step came out shorter than the Adams step, so the
+  test is on stability alone.) The first BDF step is this error's translated step, at
+  most :data:`SWITCH_GROWTH` times this one.
+- BDF to Adams when the Adams step would be at least as long as the BDF one: the ratio
+  ``(6 E)^(-1/(q+1))`` of BDF's error norm ``E`` against the same for the Adams error
+  ``E`` translates to, bounded by ``S_q / (RATIO h rho)`` (so that the Adams method would
+  not at once count as held by stability again).
+
+Errors translate through the families' error constants per ``h^(q+1) y^(q+1)``
+(:data:`camdyn.integrator.nordsieck.DERIVATIVE_ERROR`; from an Adams order above 5, BDF's
+order-5 error comes from ``z[6]``). A switch keeps the history and the order (at most 5
+for BDF).
 """
 
 from __future__ import annotations
@@ -81,10 +91,13 @@ GAMMA_CHANGE = 0.3
 MATRIX_STEPS, JACOBIAN_STEPS = 20, 50
 #: Accepted steps between tests for a switch of family [-].
 SWITCH_STEPS = 20
-#: How many times longer the BDF step must be than the Adams step to switch to BDF [-].
-RATIO = 5.0
+#: The fraction ``1 / RATIO`` of the Adams method's stability bound ``S_q / |lambda|`` at
+#: and beyond which its step counts as held by stability [-].
+RATIO = 2.0
 #: Largest growth of the step at a switch [-].
 SWITCH_GROWTH = 10.0
+#: Squarings of the Jacobian in the estimate of its spectral radius [-].
+SQUARINGS = 6
 #: ``S_q``: ``h |lambda|`` within the Adams method's region of absolute stability at order
 #: ``q`` (index q; LSODA's ``SM1``).
 STABILITY = np.array([0.0, 0.5, 0.575, 0.55, 0.45, 0.35, 0.25, 0.2, 0.15, 0.1, 0.075, 0.05, 0.025, 0.025])
@@ -97,22 +110,58 @@ def history_rows(n):
 
 
 @numba.njit(cache=True, inline="always")
+def _weighted_norm(a, y, rtol, atol, controlled):
+    """``max_i sum_j |a_ij| w_j / w_i`` over the controlled block, ``w = atol + rtol |y|``."""
+    norm = 0.0
+    for i in range(controlled):
+        row = 0.0
+        for j in range(controlled):
+            row += abs(a[i, j]) * (atol + rtol * abs(y[j]))
+        norm = max(norm, row / (atol + rtol * abs(y[i])))
+    return norm
+
+
+@numba.njit(cache=True)
+def spectral_radius(jac, y, rtol, atol, controlled):
+    """Estimate of the spectral radius [1/s] of the controlled block of ``jac``:
+    ``||J^k||^(1/k)`` for ``k = 2^SQUARINGS`` (Gelfand's formula) in the error-weighted
+    norm, by repeated squaring, each power scaled by its norm. It exceeds the spectral
+    radius by at most the ``k``-th root of the eigenvector basis' condition number."""
+    a = np.empty((controlled, controlled))
+    b = np.empty((controlled, controlled))
+    for i in range(controlled):
+        for j in range(controlled):
+            a[i, j] = jac[i, j]
+    estimate = _weighted_norm(a, y, rtol, atol, controlled)
+    power = 1.0
+    for _ in range(SQUARINGS):
+        norm = _weighted_norm(a, y, rtol, atol, controlled)
+        if norm == 0.0:
+            return 0.0   # nilpotent
+        if power > 1.0:
+            estimate *= norm ** (1.0 / power)
+        for i in range(controlled):
+            for j in range(controlled):
+                acc = 0.0
+                for k in range(controlled):
+                    acc += a[i, k] * a[k, j]
+                b[i, j] = acc / (norm * norm)
+        a, b = b, a
+        power *= 2.0
+    norm = _weighted_norm(a, y, rtol, atol, controlled)
+    return estimate * norm ** (1.0 / power)
+
+
+@numba.njit(cache=True, inline="always")
 def _jacobian(system, t, y, f, mode, p, hist, matrix, rtol, atol, controlled):
     """The Jacobian at ``(t, y)`` into the history's ``JACOBIAN`` rows (through ``matrix``),
-    and its weighted norm ``max_i sum_j |J_ij| w_j / w_i`` [1/s] over the controlled
-    components into ``STIFFNESS``."""
+    and its spectral radius into ``STIFFNESS`` [1/s]."""
     n = y.shape[0]
     systems.jacobian(system, t, y, f, mode, p, matrix)
-    norm = 0.0
     for i in range(n):
-        row = 0.0
         for j in range(n):
             hist[JACOBIAN + i, j] = matrix[i, j]
-            if i < controlled and j < controlled:
-                row += abs(matrix[i, j]) * (atol + rtol * abs(y[j]))
-        if i < controlled:
-            norm = max(norm, row / (atol + rtol * abs(y[i])))
-    hist[STIFFNESS, 0] = norm
+    hist[STIFFNESS, 0] = spectral_radius(matrix, y, rtol, atol, controlled)
     hist[JACOBIAN_AGE, 0] = 0.0
 
 
@@ -198,9 +247,8 @@ def _ratio(error, q):
 
 @numba.njit(cache=True, inline="always")
 def _consider_switch(system, t, h, q, mode, p, hist, e_norm, y1, f1, work, matrix, rtol, atol, controlled):
-    """Every :data:`SWITCH_STEPS` accepted steps, compare the steps of the two families
-    (module docstring) and choose the family, order and step that follow this accepted
-    step. Returns the Jacobians evaluated."""
+    """Every :data:`SWITCH_STEPS` accepted steps, choose the family, order and step that
+    follow this accepted step (module docstring). Returns the Jacobians evaluated."""
     if hist[SINCE, 0] < SWITCH_STEPS:
         return 0
     hist[SINCE, 0] = 0.0
@@ -209,23 +257,21 @@ def _consider_switch(system, t, h, q, mode, p, hist, e_norm, y1, f1, work, matri
     if family == ADAMS:
         _jacobian(system, t + h, y1, f1, mode, p, hist, matrix, rtol, atol, controlled)
         jacobians = 1
-        q_bdf = min(q, BDF_MAX_ORDER)
-        if q > BDF_MAX_ORDER:   # BDF's order-5 error from z[6] (Nordsieck: h^6 y^(6) / 6!)
-            for i in range(y1.shape[0]):
-                work[i] = DERIVATIVE_ERROR[BDF, q_bdf] * FACTORIAL[q_bdf + 1] * hist[Z_NEW + q_bdf + 1, i]
-            e_bdf = 0.0
-            for i in range(controlled):
-                e_bdf += (work[i] / (atol + rtol * abs(y1[i]))) ** 2
-            e_bdf = math.sqrt(e_bdf / controlled)
-        else:
-            e_bdf = e_norm * DERIVATIVE_ERROR[BDF, q] / DERIVATIVE_ERROR[ADAMS, q]
-        adams = min(_ratio(e_norm, q), STABILITY[q] / (h * hist[STIFFNESS, 0] + 1e-300))
-        bdf = _ratio(e_bdf, q_bdf)
-        if bdf >= RATIO * adams:
-            _switch(hist, BDF, q_bdf, h, bdf)
+        if h * hist[STIFFNESS, 0] >= STABILITY[q] / RATIO:
+            q_bdf = min(q, BDF_MAX_ORDER)
+            if q > BDF_MAX_ORDER:   # BDF's order-5 error from z[6] (Nordsieck: h^6 y^(6) / 6!)
+                for i in range(y1.shape[0]):
+                    work[i] = DERIVATIVE_ERROR[BDF, q_bdf] * FACTORIAL[q_bdf + 1] * hist[Z_NEW + q_bdf + 1, i]
+                e_bdf = 0.0
+                for i in range(controlled):
+                    e_bdf += (work[i] / (atol + rtol * abs(y1[i]))) ** 2
+                e_bdf = math.sqrt(e_bdf / controlled)
+            else:
+                e_bdf = e_norm * DERIVATIVE_ERROR[BDF, q] / DERIVATIVE_ERROR[ADAMS, q]
+            _switch(hist, BDF, q_bdf, h, _ratio(e_bdf, q_bdf))
     else:
         e_adams = e_norm * DERIVATIVE_ERROR[ADAMS, q] / DERIVATIVE_ERROR[BDF, q]
-        adams = min(_ratio(e_adams, q), STABILITY[q] / (h * hist[STIFFNESS, 0] + 1e-300))
+        adams = min(_ratio(e_adams, q), STABILITY[q] / (RATIO * h * hist[STIFFNESS, 0] + 1e-300))
         if adams >= _ratio(e_norm, q):
             _switch(hist, ADAMS, q, h, adams)
     return jacobians
