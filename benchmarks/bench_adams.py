@@ -108,9 +108,13 @@ def timing(case, rounds=3, rtols=RTOLS):
 
 def at_error(rows, target, key):
     """``key`` per revolution at the error ``target`` [-], interpolated in log-log on the error
-    envelope as bench_peers.time_at does for the time (None if never reached)."""
-    usable = [dict(r, ms_per_rev=r[key]) for r in rows if key in r and "error" in r]
-    return time_at(usable, target)
+    envelope as bench_peers.time_at does for the time (a count as ``log(1 + count)``; None if
+    never reached)."""
+    if key == "ms_per_rev":
+        return time_at([r for r in rows if "error" in r], target)
+    usable = [dict(r, ms_per_rev=r[key] + 1.0) for r in rows if key in r and "error" in r]   # counts may be 0
+    found = time_at(usable, target)
+    return None if found is None else found - 1.0
 
 
 def summary(results):

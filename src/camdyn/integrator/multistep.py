@@ -38,6 +38,12 @@ per :data:`SWITCH_STEPS` steps; in the BDF family the last one serves). The rule
   ``(6 E)^(-1/(q+1))`` of BDF's error norm ``E`` against the same for the Adams error
   ``E`` translates to, bounded by ``S_q / (RATIO h rho)`` (so that the Adams method would
   not at once count as held by stability again).
+- BDF to Adams also when BDF did not pay: its step, at a test, is less than ``RATIO``
+  times the Adams step at the switch (a lightly damped oscillation bounds BDF of orders
+  3-5 as it bounds Adams: neither is stable along the imaginary axis). The Adams history
+  then tests twice as rarely as before (at most :data:`MAX_PATIENCE` times), so that such
+  a problem does not alternate between the families; a BDF trial that pays, or a return
+  to Adams on accuracy, sets the interval back to :data:`SWITCH_STEPS`.
 
 Errors translate through the families' error constants per ``h^(q+1) y^(q+1)``
 (:data:`camdyn.integrator.nordsieck.DERIVATIVE_ERROR`; from an Adams order above 5, BDF's
@@ -55,6 +61,7 @@ import numpy as np
 from camdyn.integrator.linalg import lu_factor, lu_solve
 from camdyn.integrator.nordsieck import (
     ADAMS,
+    ADAMS_STEP,
     BDF,
     BDF_MAX_ORDER,
     CURRENT,
@@ -69,6 +76,7 @@ from camdyn.integrator.nordsieck import (
     NEXT_FAMILY,
     NEXT_ORDER,
     NEXT_STEP,
+    PATIENCE,
     RATE,
     ROWS,
     SINCE,
@@ -94,6 +102,8 @@ SWITCH_STEPS = 20
 #: The fraction ``1 / RATIO`` of the Adams method's stability bound ``S_q / |lambda|`` at
 #: and beyond which its step counts as held by stability [-].
 RATIO = 2.0
+#: Largest factor of SWITCH_STEPS between the tests of an Adams history [-].
+MAX_PATIENCE = 64.0
 #: Largest growth of the step at a switch [-].
 SWITCH_GROWTH = 10.0
 #: Squarings of the Jacobian in the estimate of its spectral radius [-].
@@ -249,10 +259,10 @@ def _ratio(error, q):
 def _consider_switch(system, t, h, q, mode, p, hist, e_norm, y1, f1, work, matrix, rtol, atol, controlled):
     """Every :data:`SWITCH_STEPS` accepted steps, choose the family, order and step that
     follow this accepted step (module docstring). Returns the Jacobians evaluated."""
-    if hist[SINCE, 0] < SWITCH_STEPS:
+    family = int(hist[FAMILY, 0])
+    if hist[SINCE, 0] < SWITCH_STEPS * (max(1.0, hist[PATIENCE, 0]) if family == ADAMS else 1.0):
         return 0
     hist[SINCE, 0] = 0.0
-    family = int(hist[FAMILY, 0])
     jacobians = 0
     if family == ADAMS:
         _jacobian(system, t + h, y1, f1, mode, p, hist, matrix, rtol, atol, controlled)
@@ -269,11 +279,18 @@ def _consider_switch(system, t, h, q, mode, p, hist, e_norm, y1, f1, work, matri
             else:
                 e_bdf = e_norm * DERIVATIVE_ERROR[BDF, q] / DERIVATIVE_ERROR[ADAMS, q]
             _switch(hist, BDF, q_bdf, h, _ratio(e_bdf, q_bdf))
+            hist[ADAMS_STEP, 0] = h
     else:
         e_adams = e_norm * DERIVATIVE_ERROR[ADAMS, q] / DERIVATIVE_ERROR[BDF, q]
         adams = min(_ratio(e_adams, q), STABILITY[q] / (RATIO * h * hist[STIFFNESS, 0] + 1e-300))
         if adams >= _ratio(e_norm, q):
             _switch(hist, ADAMS, q, h, adams)
+            hist[PATIENCE, 0] = 1.0
+        elif h < RATIO * hist[ADAMS_STEP, 0]:   # BDF did not pay: back, and test less often
+            _switch(hist, ADAMS, q, h, adams)
+            hist[PATIENCE, 0] = min(2.0 * max(1.0, hist[PATIENCE, 0]), MAX_PATIENCE)
+        else:
+            hist[PATIENCE, 0] = 1.0
     return jacobians
 
 

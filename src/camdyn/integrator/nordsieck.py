@@ -93,7 +93,9 @@ GAMMA = SCALARS + 13     # h l_0 of the factored BDF matrix [s]
 RATE = SCALARS + 14      # the Newton iteration's convergence rate [-]
 MATRIX_AGE = SCALARS + 15    # steps since the BDF matrix was factored [-]
 JACOBIAN_AGE = SCALARS + 16  # steps since the Jacobian was evaluated [-]
-ROWS = SCALARS + 17
+PATIENCE = SCALARS + 17  # tests an Adams history skips, after BDF did not pay [-]
+ADAMS_STEP = SCALARS + 18    # the Adams step at the last switch to BDF [s]
+ROWS = SCALARS + 19
 JACOBIAN = ROWS          # first of the n rows of the Jacobian
 
 
