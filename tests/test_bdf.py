@@ -52,6 +52,25 @@ def test_bdf_coefficients_are_those_of_the_backward_differences():
     assert nd.CURRENT[nd.BDF, 1] == pytest.approx(nd.CURRENT[nd.ADAMS, 1], rel=1e-14)
 
 
+def test_spectral_radius_estimate():
+    # Gelfand's ||J^64||^(1/64) bounds the spectral radius from above (any induced norm
+    # does) and, for these matrices, lies within 25 % of it; the oscillator's weighted
+    # norm itself is 300 times its spectral radius at y = (1, 0)
+    rng = np.random.default_rng(3)
+    y = np.array([1.0, 0.0, 0.0])
+    matrices = [rng.normal(size=(3, 3)) * 10.0 ** rng.uniform(-2, 4) for _ in range(20)]
+    matrices += [np.array([[0, 1, 0], [-w ** 2, -2 * z * w, 0], [1, 0, 0]], float)
+                 for w, z in ((3.0, 0.1), (100.0, 50.0), (6000.0, 0.02))]
+    for jac in matrices:
+        rho = np.max(np.abs(np.linalg.eigvals(jac)))
+        estimate = ms.spectral_radius(jac, y, 1e-6, 1e-8, 3)
+        assert rho * (1 - 1e-9) <= estimate <= 1.25 * rho, (jac, rho, estimate)
+    weights = 1e-8 + 1e-6 * np.abs(y[:2])
+    oscillator = matrices[-3][:2, :2]
+    weighted_norm = np.max(np.abs(oscillator) @ weights / weights)
+    assert weighted_norm > 300 * np.max(np.abs(np.linalg.eigvals(oscillator)))
+
+
 def fixed_step_error(q, n):
     """Largest global error at t = 0.1, 0.2, .. 1 s of BDF of order ``q`` at the fixed step
     1/n from the exact Nordsieck array (the Taylor coefficients of the closed form),
