@@ -99,8 +99,9 @@ GAMMA_CHANGE = 0.3
 MATRIX_STEPS, JACOBIAN_STEPS = 20, 50
 #: Accepted steps between tests for a switch of family [-].
 SWITCH_STEPS = 20
-#: The fraction ``1 / RATIO`` of the Adams method's stability bound ``S_q / |lambda|`` at
-#: and beyond which its step counts as held by stability [-].
+#: The fraction ``1 / RATIO`` of the Adams method's stability bound ``S_q / rho`` at and
+#: beyond which its step counts as held by stability; and the least ratio of the BDF step
+#: to the Adams step at the switch for which BDF pays [-].
 RATIO = 2.0
 #: Largest factor of SWITCH_STEPS between the tests of an Adams history [-].
 MAX_PATIENCE = 64.0
@@ -109,7 +110,7 @@ SWITCH_GROWTH = 10.0
 #: Squarings of the Jacobian in the estimate of its spectral radius [-].
 SQUARINGS = 6
 #: ``S_q``: ``h |lambda|`` within the Adams method's region of absolute stability at order
-#: ``q`` (index q; LSODA's ``SM1``).
+#: ``q`` (index q; LSODA's ``SM1``) [-].
 STABILITY = np.array([0.0, 0.5, 0.575, 0.55, 0.45, 0.35, 0.25, 0.2, 0.15, 0.1, 0.075, 0.05, 0.025, 0.025])
 
 
