@@ -11,9 +11,10 @@ against its cached SciPy DOP853 truth at rtol 1e-13):
    1e-5 to 1e-11, atol as bench_peers gives numbalsoda (rtol * 1e-4). The calls are
    counted in the right-hand side itself (Jacobian columns included). This asks which
    multistep family needs the fewest calls at equal error, without timing Python.
-2. ``timing``: camdyn's compiled core (``driver.integrate``) with DOP853 and with its
-   Adams method (``METHOD_ADAMS``), against numbalsoda's LSODA, in one process,
-   interleaved, best of 3, at bench_peers' rungs (rtol 1e-4 to 1e-11 in half decades).
+2. ``timing``: camdyn's compiled core (``driver.integrate``) with DOP853, with its
+   Adams method (``METHOD_ADAMS``) and with Adams and BDF switched automatically
+   (``METHOD_MULTISTEP``), against numbalsoda's LSODA, in one process, interleaved, best
+   of 3, at bench_peers' rungs (rtol 1e-4 to 1e-11 in half decades).
 
 Run with the peers' environment (numbalsoda)::
 
@@ -40,6 +41,7 @@ from camdyn.integrator import driver
 from camdyn.systems import registry as systems
 
 HERE = Path(__file__).resolve().parent
+COUNTED = ("accepted_steps", "rejected_steps", "rhs_calls", "jacobians", "bdf_steps")
 REVOLUTIONS = 30
 COUNT_RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
 # name -> (integrator, method, Newton corrector with a finite-difference Jacobian)
@@ -85,7 +87,8 @@ def core(method):
             scalar_atol(rtol), case.period / 32, method, 50_000_000, 64 + 16 * case.revolutions, True)
         if counters[driver.COUNT_STATUS] != driver.STATUS_OK:
             raise RuntimeError(driver.STATUS_MESSAGES[int(counters[driver.COUNT_STATUS])])
-        return y[:, 0], {name: int(counters[i]) for i, name in enumerate(driver.COUNTER_NAMES[:4])}
+        return y[:, 0], {name: int(counters[i]) for i, name in enumerate(driver.COUNTER_NAMES)
+                         if name in COUNTED}
     return run
 
 
@@ -94,20 +97,24 @@ def timing(case, rounds=3, rtols=RTOLS):
     per rung (bench_peers.measure, no time budget)."""
     from numbalsoda import lsoda
     runners = {"camdyn core DOP853": core(driver.METHOD_DOP853), "camdyn core Adams": core(driver.METHOD_ADAMS),
-               "numbalsoda LSODA": numbalsoda_tool(lsoda)}
+               "camdyn core Adams/BDF": core(driver.METHOD_MULTISTEP), "numbalsoda LSODA": numbalsoda_tool(lsoda)}
     curves = measure(case, runners, rtols, rounds, math.inf)
     for rows in curves.values():                   # counters per revolution, as adams.json holds them
         for row in rows:
             row.update({k: v / case.revolutions for k, v in row.items()
-                        if k in ("accepted_steps", "rejected_steps", "rhs_calls", "jacobians")})
+                        if k in COUNTED})
     return curves
 
 
 def at_error(rows, target, key):
     """``key`` per revolution at the error ``target`` [-], interpolated in log-log on the error
-    envelope as bench_peers.time_at does for the time (None if never reached)."""
-    usable = [dict(r, ms_per_rev=r[key]) for r in rows if key in r and "error" in r]
-    return time_at(usable, target)
+    envelope as bench_peers.time_at does for the time (a count as ``log(1 + count)``; None if
+    never reached)."""
+    if key == "ms_per_rev":
+        return time_at([r for r in rows if "error" in r], target)
+    usable = [dict(r, ms_per_rev=r[key] + 1.0) for r in rows if key in r and "error" in r]   # counts may be 0
+    found = time_at(usable, target)
+    return None if found is None else found - 1.0
 
 
 def summary(results):
@@ -126,13 +133,15 @@ def summary(results):
                 lines.append(f"| {name} | " + " | ".join(cells) + " |")
             lines.append("")
         if "timing" in entry:
-            lines += [f"{label}: ms per revolution and calls per revolution at equal error (interleaved, best of 3)",
-                      "", "| tool | " + " | ".join(f"ms/rev at {t:.0e} | rhs/rev at {t:.0e}" for t in TARGETS) + " |",
-                      "|---|" + "---|" * (2 * len(TARGETS))]
+            keys = ("ms_per_rev", "rhs_calls", "accepted_steps", "jacobians", "bdf_steps")
+            heads = ("ms/rev", "rhs/rev", "steps/rev", "Jacobians/rev", "BDF steps/rev")
+            lines += [f"{label}: per revolution at equal error (interleaved, best of 3)",
+                      "", "| tool | " + " | ".join(f"{k} at {t:.0e}" for t in TARGETS for k in heads) + " |",
+                      "|---|" + "---|" * (len(heads) * len(TARGETS))]
             for name, rows in entry["timing"].items():
                 cells = []
                 for t in TARGETS:
-                    cells += [text(at_error(rows, t, "ms_per_rev")), text(at_error(rows, t, "rhs_calls"))]
+                    cells += [text(at_error(rows, t, k)) if any(k in r for r in rows) else "-" for k in keys]
                 lines.append(f"| {name} | " + " | ".join(cells) + " |")
             lines.append("")
     return "\n".join(lines)

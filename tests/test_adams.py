@@ -78,13 +78,15 @@ def impact_rig():
     return prep, t_out, truth
 
 
+@pytest.mark.parametrize("method", [driver.METHOD_ADAMS, driver.METHOD_MULTISTEP])
 @pytest.mark.parametrize("rtol", [1e-6, 1e-9])
-def test_cam_run_against_the_oracle(impact_rig, rtol):
+def test_cam_run_against_the_oracle(impact_rig, rtol, method):
     # every impact located, the angle within a modest multiple of the tolerance of SciPy's
-    # DOP853 run of the reference model (restarted at each switch)
+    # DOP853 run of the reference model (restarted at each switch); the same with Adams and
+    # BDF switched automatically
     prep, t_out, truth = impact_rig
     y, _, events, counters = driver.integrate(systems.CAM_FOLLOWER, prep.p, prep.y0.copy(), 0.0, t_out[-1], t_out,
-                                              rtol, rtol * 1e-4, t_out[-1] / 32, driver.METHOD_ADAMS, 10 ** 7, 100)
+                                              rtol, rtol * 1e-4, t_out[-1] / 32, method, 10 ** 7, 100)
     assert counters[driver.COUNT_STATUS] == 0
     assert events.shape[0] > 0
     error = np.max(np.abs(y[:, 0] - truth[0])) / np.max(np.abs(truth[0]))

@@ -4,11 +4,12 @@ Algorithm (per accepted step from ``t`` to ``t + h``):
 
 1. step with DOP853, Dormand-Prince 5(4) or the Rosenbrock method RODAS4 (chosen per mode by
    the system, or forced), or with the Adams method of :mod:`camdyn.integrator.nordsieck`
-   when forced (``METHOD_ADAMS``; its history is started from a DOP853 step after every
-   event); accept if the scaled error norm is at most 1;
+   when forced (``METHOD_ADAMS``), or with Adams and BDF switched automatically
+   (``METHOD_MULTISTEP``, :mod:`camdyn.integrator.multistep`; the history is started from
+   a DOP853 step after every event); accept if the scaled error norm is at most 1;
 2. build the step's continuous extension (Dormand-Prince's own 4th-order dense output,
    the cubic Hermite interpolant after a Rosenbrock step, the Nordsieck polynomial after
-   an Adams step);
+   an Adams or BDF step);
 3. for every guard active in the current mode, look for a sign change against its
    expected sign at the step end and at the extrema of the guard's own cubic (from its
    exact rates at both ends, which the system computes from the acceleration; this
@@ -39,6 +40,7 @@ import numpy as np
 
 from camdyn.integrator.counters import (
     COUNT_ACCEPTED,
+    COUNT_BDF,
     COUNT_EVENTS,
     COUNT_EVENTS_DROPPED,
     COUNT_EXPLICIT,
@@ -78,7 +80,8 @@ from camdyn.integrator.events import (
 )
 from camdyn.integrator.inlining import InlinedPipeline
 from camdyn.integrator.interrupt import POLL_STEPS, interrupted
-from camdyn.integrator.nordsieck import ROWS, TIME, adams_accept, adams_ready, adams_start, adams_step
+from camdyn.integrator.multistep import history_rows, multistep_step
+from camdyn.integrator.nordsieck import BDF, FAMILY, TIME, adams_accept, adams_ready, adams_start
 from camdyn.integrator.sampling import sample
 from camdyn.integrator.steppers import (
     KIND_DOP853,
@@ -96,11 +99,11 @@ from camdyn.systems import registry as systems
 __all__ = [
     "integrate", "COUNT_ACCEPTED", "COUNT_REJECTED", "COUNT_RHS", "COUNT_JACOBIANS", "COUNT_EXPLICIT",
     "COUNT_ROSENBROCK", "COUNT_EVENTS", "COUNT_ROOT_ITERATIONS", "COUNT_STATUS", "COUNT_EVENTS_DROPPED",
-    "COUNT_SIZE", "COUNTER_NAMES", "STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW",
+    "COUNT_BDF", "COUNT_SIZE", "COUNTER_NAMES", "STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW",
     "STATUS_NOT_FINITE", "STATUS_ZENO", "STATUS_INTERRUPTED", "STATUS_MESSAGES", "METHOD_AUTO", "METHOD_EXPLICIT",
-    "METHOD_ROSENBROCK", "METHOD_DOP853", "METHOD_ADAMS", "EVENT_TIME", "EVENT_GUARD", "EVENT_NEW_SIGN",
-    "EVENT_MONITOR", "EVENT_GUARDS", "EVENT_RETRY_ABOVE", "EVENT_RETRY_BELOW", "EVENT_RETRY_LOST", "EVENT_RETRY_MARGIN",
-    "EVENT_STEP_FLOOR", "event_columns",
+    "METHOD_ROSENBROCK", "METHOD_DOP853", "METHOD_ADAMS", "METHOD_MULTISTEP", "EVENT_TIME", "EVENT_GUARD",
+    "EVENT_NEW_SIGN", "EVENT_MONITOR", "EVENT_GUARDS", "EVENT_RETRY_ABOVE", "EVENT_RETRY_BELOW", "EVENT_RETRY_LOST",
+    "EVENT_RETRY_MARGIN", "EVENT_STEP_FLOOR", "event_columns",
 ]
 
 METHOD_AUTO = 0  # the system chooses (systems.preferred_method)
@@ -108,6 +111,7 @@ METHOD_EXPLICIT = 1  # Dormand-Prince 5(4)
 METHOD_ROSENBROCK = 2  # RODAS4
 METHOD_DOP853 = 3  # DOP853
 METHOD_ADAMS = 4  # variable-order Adams-Moulton, Nordsieck form, functional iteration
+METHOD_MULTISTEP = 5  # Adams and BDF in Nordsieck form, switched automatically
 
 STEP_ACCEPTED = 0  # verdicts on a trial step
 STEP_RETRY = 1
@@ -141,7 +145,7 @@ def _allocate(system, y_start, n_out, max_events):
 def _workspace(n, m):
     """Scratch arrays of one run: stepper stages, the Rosenbrock
     iteration matrix and its pivots, the Adams history, states [n] and guard values [m]."""
-    history = np.zeros((ROWS, n))
+    history = np.zeros((history_rows(n), n))
     history[TIME, 0] = np.nan   # no history yet: the first Adams step starts at order 1
     stage_arrays = (np.empty((6, n)), np.empty((6, n)), np.empty((16, n)), np.empty((7, n)), np.empty(n),
                     np.zeros(2), np.empty(4), np.empty((n, n)), np.empty(n, dtype=np.int64), history)
@@ -216,18 +220,20 @@ def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, m
         Scaled error norm (at most 1 to accept).
     """
     chosen = systems.preferred_method(system, mode, p) if method == 0 else method
-    if chosen == METHOD_ADAMS and not adams_ready(history, t, y):
-        chosen = METHOD_DOP853   # a step that (re)starts the Adams history: _adams_start
+    if chosen >= METHOD_ADAMS and not adams_ready(history, t, y):
+        chosen = METHOD_DOP853   # a step that (re)starts the multistep history: _adams_start
     if chosen == METHOD_ROSENBROCK:
         kind = KIND_HERMITE
         counters[COUNT_RHS] += rosenbrock_step(system, t, y, f, h, mode, p, work, stages, matrix, pivots, y1, err)
         counters[COUNT_JACOBIANS] += 1
         order = 4.0
         e = error_norm(y, y1, err, rtol, atol, systems.controlled_size(system))
-    elif chosen == METHOD_ADAMS:
+    elif chosen >= METHOD_ADAMS:
         kind = KIND_NORDSIECK
-        e, order, calls = adams_step(system, t, y, f, h, mode, p, history, y1, f1, err, rtol, atol)
+        e, order, calls, jacobians = multistep_step(system, t, y, f, h, mode, p, history, y1, f1, err, matrix, pivots,
+                                                    rtol, atol, chosen == METHOD_MULTISTEP)
         counters[COUNT_RHS] += calls
+        counters[COUNT_JACOBIANS] += jacobians
     elif chosen == METHOD_DOP853:
         kind = KIND_DOP853
         counters[COUNT_RHS] += dop853_step(system, t, y, f, h, mode, p, k16, ytmp, y1, f1, err, err3,
@@ -273,11 +279,13 @@ def _verdict(t, h, e, order, y1, counters):
 
 
 @numba.njit(cache=True, inline="always")
-def _step_end(system, kind, t, h, y1, f1, mode, p, g1, gr1, counters):
+def _step_end(system, kind, t, h, y1, f1, mode, p, g1, gr1, history, counters):
     """Count the accepted step; rates ``f1`` (after a Rosenbrock step) and guards ``g1``
     with their rates ``gr1`` at its end ``t + h`` [s]."""
     counters[COUNT_ACCEPTED] += 1
-    if kind == KIND_HERMITE:
+    if kind == KIND_NORDSIECK and history[FAMILY, 0] == BDF:
+        counters[COUNT_BDF] += 1
+    elif kind == KIND_HERMITE:
         counters[COUNT_ROSENBROCK] += 1
         systems.rhs(system, t + h, y1, mode, p, f1)
         counters[COUNT_RHS] += 1
@@ -331,7 +339,7 @@ def _adams_start(system, method, kind, ready, t, h, y, y1, f1, mode, p, k16, ytm
     """After a DOP853 step that the Adams method took to (re)start, its history at the
     step's end from the step's continuous extension. Returns whether the extension is
     ready and the first Adams step [s] (``h`` otherwise)."""
-    if method != METHOD_ADAMS or kind != KIND_DOP853:
+    if method < METHOD_ADAMS or kind != KIND_DOP853:
         return ready, h
     ready = ensure_extension(ready, system, t, y, h, y1, f1, mode, p, k16, ytmp, f7, counters)
     return ready, adams_start(history, f7, y1, t + h, h, rtol, atol, systems.controlled_size(system), err)
@@ -379,7 +387,8 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
         Largest step [s].
     method : int
         0 lets the system choose per mode (``systems.preferred_method``); 1 Dormand-Prince
-        5(4), 2 RODAS4, 3 DOP853, 4 Adams-Moulton of variable order (Nordsieck form).
+        5(4), 2 RODAS4, 3 DOP853, 4 Adams-Moulton of variable order (Nordsieck form), 5
+        Adams and BDF switched automatically (:mod:`camdyn.integrator.multistep`).
     max_steps, max_events : int
         Limits on accepted steps and on logged events.
     interruptible : bool
@@ -394,7 +403,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
         Hybrid mode at each output time.
     events : ndarray (n_events, 4 + m + n)
         Event log, columns :func:`event_columns` (``m`` guards).
-    counters : ndarray (10,) of int64
+    counters : ndarray (COUNT_SIZE,) of int64
     """
     y_out, mode_out, events, counters, y, mode = _allocate(system, y_start, t_out.shape[0], max_events)
     stage_arrays, states, guards = _workspace(y.shape[0], events.shape[1] - EVENT_GUARDS - y.shape[0])
@@ -425,7 +434,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             continue
         if verdict == STEP_FAILED:
             break
-        _step_end(system, kind, t, h, y1, f1, mode, p, g1, gr1, counters)
+        _step_end(system, kind, t, h, y1, f1, mode, p, g1, gr1, history, counters)
         ready = midpoint_guards(system, t, h, y, f, y1, f1, dwork, kind, mode, p, k16, ytmp, f7, ymid, gr, gr1,
                                 gv, grv, ready, counters)
         tau_event, k_event, ready = earliest_crossing(system, t, h, y, f, y1, f1, dwork, kind, mode, p, k16, ytmp,
@@ -448,7 +457,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             t, i_out, monitor_max, h = _advance(system, t, h, t_end if last else t + h, e, order, y, f, y1, f1,
                                                 dwork, kind, mode, p, k16, ytmp, f7, yo, g, gr, g1, gr1, t_out, i_out,
                                                 y_out, mode_out, monitor_max, h_regime, ready, counters)
-            if method == METHOD_ADAMS and kind == KIND_DOP853:
+            if method >= METHOD_ADAMS and kind == KIND_DOP853:
                 h = h_adams
     i_out = _fill_end(t, y, mode, t_out, i_out, y_out, mode_out, counters)
     return y_out, mode_out, events[:n_events].copy(), counters
