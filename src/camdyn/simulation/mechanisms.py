@@ -141,7 +141,7 @@ def _run_counters(system_id, p, y0, duration, sample_rate, period, rtol, atol, m
     t_out = np.minimum(np.arange(n_out) / sample_rate, duration)
     if max_step is None:
         max_step = default_max_step(period, duration)
-    max_events = int(64 + 16 * (duration / period if math.isfinite(period) else 100))
+    max_events = limits.event_room(duration, period)
     start = _time.perf_counter()
     y, modes, events, counters = limits.with_room_for_events(
         lambda room: driver.integrate(system_id, p.copy(), y0, 0.0, float(duration), t_out, float(rtol), float(atol),
