@@ -354,6 +354,18 @@ def _stabilized(h, e, e_last):
 
 
 @numba.njit(cache=True, inline="always")
+def _proposal(system, method, kind, h, h_adams, e, e_accepted):
+    """The step [s] after an accepted step of ``kind``: the multistep history's first
+    step after its DOP853 start, the stabilized DOP853 step (:func:`_stabilized`) where
+    the system's DOP853 steps are controlled by their plain estimate, else ``h``."""
+    if method >= METHOD_ADAMS and kind == KIND_DOP853:
+        return h_adams
+    if kind == KIND_DOP853 and systems.plain_error_estimate(system):
+        return _stabilized(h, e, e_accepted)
+    return h
+
+
+@numba.njit(cache=True, inline="always")
 def _adams_start(system, method, kind, ready, t, h, y, y1, f1, mode, p, k16, ytmp, f7, history, rtol, atol, err,
                  counters):
     """After a DOP853 step that the Adams method took to (re)start, its history at the
@@ -478,10 +490,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             t, i_out, monitor_max, h = _advance(system, t, h, t_end if last else t + h, e, order, y, f, y1, f1,
                                                 dwork, kind, mode, p, k16, ytmp, f7, yo, g, gr, g1, gr1, t_out, i_out,
                                                 y_out, mode_out, monitor_max, h_regime, ready, counters)
-            if method >= METHOD_ADAMS and kind == KIND_DOP853:
-                h = h_adams
-            elif kind == KIND_DOP853 and systems.plain_error_estimate(system):
-                h = _stabilized(h, e, e_accepted)
+            h = _proposal(system, method, kind, h, h_adams, e, e_accepted)
             e_accepted = max(e, 1e-4)
     i_out = _fill_end(t, y, mode, t_out, i_out, y_out, mode_out, counters)
     return y_out, mode_out, events[:n_events].copy(), counters
