@@ -18,6 +18,11 @@ def _value(text: str, key: str, unit: str) -> float:
     dimensionless parameter, as for ``--set``)."""
     from camdyn.params.units import parse_quantity, parse_speed
 
+    if key.startswith("drive."):                  # a drive key, read as a mechanism file reads it
+        from camdyn.params.mechanism import ANGULAR_SPEED, SCHEMA, angular_speed
+        if SCHEMA[key].unit == ANGULAR_SPEED:
+            return angular_speed(text, key)
+        return float(parse_quantity(text, SCHEMA[key].unit, key))
     if unit == "Hz":
         return parse_speed(text, key)
     return float(parse_quantity(text, unit, key))
@@ -25,8 +30,10 @@ def _value(text: str, key: str, unit: str) -> float:
 
 def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                     set_: Optional[List[str]] = SetOption,
-                    parameter: str = typer.Option("motion.speed", help="Dotted key continued, e.g. motion.speed, "
-                                                                       "cam.runout (camdyn presets keys)."),
+                    parameter: Optional[str] = typer.Option(
+                        None, help="Dotted key continued, e.g. motion.speed (the default), cam.runout (camdyn "
+                                   "presets keys); for a cam under its drive a drive key (default the one that sets "
+                                   "its speed: drive.torque, drive.free_speed or drive.target_speed)."),
                     start: str = typer.Option(..., "--from", help="First value, with a unit: 5Hz, 1.2mm."),
                     stop: str = typer.Option(..., "--to", help="Last value, with a unit."),
                     period: int = typer.Option(1, help="Forcing periods per orbit period (2 for period-2 orbits)."),
@@ -56,7 +63,12 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     followed (docs/continuation.md). A translating follower (the preset alzate) is
     continued in motion.speed, its orbits taken at cam angle 0. A mechanism file (the
     flexible pivot, or two followers with drive.kind = 'prescribed') is continued in a
-    system key or, for the flexible pivot, pivot.stiffness or pivot.damping."""
+    system key or, for the flexible pivot, pivot.stiffness or pivot.damping. The driven
+    cam and two followers under a torque, a motor or a controller are autonomous: their
+    orbits are taken on the section at the starting cam angle, their period (the time
+    for k turns) is an unknown, and they are continued in a drive key (drive.torque,
+    drive.free_speed, drive.target_speed, drive.shaft_inertia, ...) or a key of the cam
+    or the followers."""
     from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset, switch_doublings
 
     check_outputs(netcdf=out, figure=plot, force=force)
@@ -69,10 +81,10 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
             raise ParameterError("--segments is for the cam-follower; the translating follower is continued by "
                                  "single shooting")
         from camdyn.cli.translating import continue_translating_command
-        continue_translating_command(source, set_, parameter, start, stop, period, step, max_points, transient,
+        continue_translating_command(source, set_, parameter or "motion.speed", start, stop, period, step, max_points, transient,
                                      doublings, brute_force, plot, out, quiet, json_)
         return
-    system, unit, mechanism = _load(source, set_, parameter, brute_force)
+    system, parameter, unit, mechanism = _load(source, set_, parameter, brute_force)
     first, last = _value(start, "--from", unit), _value(stop, "--to", unit)
     if first == last:
         raise ParameterError("--from and --to must differ")
@@ -146,25 +158,30 @@ def _brute_force(source, set_, parameter, first, last, count, quiet):
 
 
 def _load(source, set_, parameter, brute_force):
-    """``(system, unit, mechanism)``: the cam-follower, or a mechanism's rig
-    (``mechanism`` True), and the continued parameter's unit."""
+    """``(system, parameter, unit, mechanism)``: the cam-follower, or a mechanism's rig
+    (``mechanism`` True), the continued parameter (its default where None) and its unit."""
+    from camdyn.continuation.autonomous import default_key, is_autonomous
     from camdyn.continuation.problem import parameter_unit
     from camdyn.params.mechanism import is_mechanism
 
     if not is_mechanism(source):
         system = load_source(source, set_)
-        return system, parameter_unit(system, parameter), False
+        parameter = parameter or "motion.speed"
+        return system, parameter, parameter_unit(system, parameter), False
     from camdyn.io.mechanism_config import load_mechanism, mechanism_rig
     from camdyn.params.config import parse_assignments
 
     if brute_force:
         raise ParameterError("--brute-force sweeps the cam-follower; it is not offered for a mechanism")
     rig = mechanism_rig(load_mechanism(source, parse_assignments(set_)))
-    return rig, _mechanism_unit(rig, parameter), True
+    parameter = parameter or (default_key(rig) if is_autonomous(rig) else "motion.speed")
+    return rig, parameter, _mechanism_unit(rig, parameter), True
 
 
 def _mechanism_unit(rig, parameter: str) -> str:
-    """The unit of a mechanism's continued parameter (a bearing key or the system's)."""
+    """The unit of a mechanism's continued parameter (a bearing key, a drive key or the
+    system's)."""
+    from camdyn.continuation.autonomous import DRIVE_KEYS, is_autonomous, key_unit
     from camdyn.continuation.mechanisms import BEARING_KEYS
     from camdyn.continuation.problem import parameter_unit
     from camdyn.simulation.flexible_pivot import FlexiblePivotRig
@@ -173,6 +190,11 @@ def _mechanism_unit(rig, parameter: str) -> str:
         if not isinstance(rig, FlexiblePivotRig):
             raise ParameterError(f"{parameter} is a key of the flexible pivot only")
         return BEARING_KEYS[parameter]
+    if is_autonomous(rig):
+        return key_unit(rig, parameter)
+    if parameter in DRIVE_KEYS:
+        raise ParameterError(f"{parameter} is a key of a cam under its drive (the driven cam, or two followers "
+                             "whose drive.kind is not 'prescribed')")
     return parameter_unit(rig.system, parameter)
 
 

@@ -47,7 +47,7 @@ from camdyn.simulation.runner import prepare
 from camdyn.simulation.two_followers import TwoFollowerRig, pack_two_followers
 from camdyn.systems import registry as systems
 
-__all__ = ["autonomous_problem", "DRIVE_KEYS", "default_key", "is_autonomous"]
+__all__ = ["autonomous_problem", "DRIVE_KEYS", "default_key", "is_autonomous", "key_unit"]
 
 #: The drive's continuous keys, their units, and the drive kinds each enters (None: all).
 DRIVE_KEYS = {
@@ -139,6 +139,13 @@ def _key(rig, key: str) -> tuple[str, float, bool]:
     if value is None or not math.isfinite(float(value)):
         raise ParameterError(f"{key} has no finite value to start from")
     return unit, float(value), False
+
+
+def key_unit(rig, key: str) -> str:
+    """The unit of the continuous parameter ``key`` of an autonomous mechanism, refused
+    (:class:`ParameterError`) where it does not enter the mechanism (as
+    :func:`autonomous_problem` refuses it)."""
+    return _key(rig, key)[0]
 
 
 def _check_system(system: System) -> None:
