@@ -204,3 +204,140 @@ def test_a_huge_shaft_inertia_gives_the_orbit_of_the_cam_held_at_its_speed(rig_s
     assert abs(orbit.multipliers[0] - rigid) < 1e-3 * (1.0 - rigid)
     follower = np.sort(np.abs(orbit.multipliers[1:]))
     assert np.max(np.abs(follower - np.sort(np.abs(held.multipliers)))) < 1e-4 * np.max(follower)
+
+
+def pair_rig(drive):
+    """The drum brake (two identical followers opposite each other, gravity off) under
+    ``drive``."""
+    rig = drum_brake()
+    return TwoFollowerRig(rig.system, rig.second, rig.placement, drive)
+
+
+@pytest.fixture(scope="module")
+def pair_orbit():
+    """The drum brake's cam on the example's DC motor (its shaft 2e-4 kg m^2)."""
+    rig = pair_rig(dataclasses.replace(DRIVES["motor"], shaft_inertia=2e-4))
+    problem = mechanism_problem(rig)
+    return rig, problem, find_orbit(problem, transient=30)
+
+
+def test_two_followers_on_a_motor_settle_onto_their_orbit(pair_orbit):
+    """Two followers on a motor-driven shaft: five unknowns (each follower's angle and
+    rate, the shaft's speed). A plain time-domain run from the orbit's state, perturbed by
+    1e-4 rad/s in follower 1's rate, crosses the section 20 turns later on the orbit's
+    state to 1e-8 (its multipliers are at most 0.012), the last turn taking the orbit's
+    period to 1e-10 relative; and the multipliers are those of the Poincare map's
+    Jacobian by central differences of plain runs, to 1e-5."""
+    rig, problem, orbit = pair_orbit
+    assert problem.unknowns == 5 and orbit.stable
+    p, y0 = pack_two_followers(rig.system, rig.second, rig.placement, rig.drive)
+    theta0 = y0[4]
+    x = orbit.state.copy()
+    x[1] += 1e-4
+    y = time_state(x, y0, 4, rig.drive)
+    _, y = next_section(systems.TWO_FOLLOWERS, p, y, 4, theta0 + 19 * 2.0 * math.pi)
+    elapsed, y = next_section(systems.TWO_FOLLOWERS, p, y, 4, theta0 + 20 * 2.0 * math.pi)
+    assert np.max(np.abs(periodic(y, 4, rig.drive) - orbit.state) / (1.0 + np.abs(orbit.state))) < 1e-8
+    assert abs(elapsed - orbit.period) < 1e-10 * orbit.period
+    matrix = np.empty((5, 5))
+    for j in range(5):
+        step = 1e-6 * max(abs(orbit.state[j]), 1.0)
+        ends = []
+        for sign in (1.0, -1.0):
+            x = orbit.state.copy()
+            x[j] += sign * step
+            _, y = next_section(systems.TWO_FOLLOWERS, p, time_state(x, y0, 4, rig.drive), 4,
+                                theta0 + 2.0 * math.pi)
+            ends.append(periodic(y, 4, rig.drive))
+        matrix[:, j] = (ends[0] - ends[1]) / (2.0 * step)
+    reference = np.sort_complex(np.linalg.eigvals(matrix))
+    assert np.max(np.abs(reference - np.sort_complex(orbit.multipliers))) < 1e-5
+
+
+def test_a_short_continuation_in_the_motors_free_speed():
+    """The example's motor (``driven_cam.toml``) from a free speed of 13.86 Hz towards
+    14.5 Hz: four orbits, the cam's mean speed rising with the motor's; each closes under a
+    plain time-domain run from its state to the next section, to 1e-9, in its period to
+    1e-10 relative."""
+    rig = mechanism_rig(load_mechanism(EXAMPLE))
+    problem, branch = trace_mechanism(rig, "drive.free_speed", 2.0 * math.pi * 13.86, 2.0 * math.pi * 14.5,
+                                      step=0.01, max_points=4, transient=30)
+    assert problem.unit == "rad/s" and len(branch.orbits) == 4
+    assert np.all(np.diff([o.parameter for o in branch.orbits]) > 0.0)
+    assert np.all(np.diff([o.period for o in branch.orbits]) < 0.0)
+    theta0 = problem.t_start
+    for orbit in branch.orbits:
+        drive = dataclasses.replace(rig.drive, free_speed=orbit.parameter)
+        y0 = time_state(orbit.state, np.array([0.0, 0.0, theta0, 0.0, 0.0, 0.0, 0.0, 0.0]), 2, drive)
+        elapsed, y = next_section(systems.DRIVEN_CAM, driven_p(rig.system, drive), y0, 2, theta0 + 2.0 * math.pi)
+        assert np.max(np.abs(periodic(y, 2, drive) - orbit.state) / (1.0 + np.abs(orbit.state))) < 1e-9
+        assert abs(elapsed - orbit.period) < 1e-10 * orbit.period
+
+
+def test_bad_input_is_refused_before_any_work(rig_system, monkeypatch):
+    """Each refused with a ParameterError that says why, no run made."""
+    def no_run(*args, **kwargs):
+        raise AssertionError("a run was made")
+
+    monkeypatch.setattr(driver, "integrate", no_run)
+    motor = DrivenCamRig(rig_system, DRIVES["motor"])
+    cases = [
+        (DrivenCamRig(rig_system, CamDrive(3e-4, "prescribed")), None, "fixed period"),
+        (DrivenCamRig(rig_system, CamDrive(3e-4, "constant", torque=0.0, bearing_viscous=1e-3)), None,
+         "no steady state"),
+        (DrivenCamRig(rig_system.with_values(**{"motion.direction": -1}), DRIVES["motor"]), None, "turning forward"),
+        (motor, "motion.speed", "sets only where the driven cam starts"),
+        (motor, "drive.torque", "does not enter a 'motor' drive"),
+        (motor, "drive.kind", "not a continuous drive key"),
+        (motor, "cam.nonsense", "unknown parameter"),
+    ]
+    for rig, key, message in cases:
+        with pytest.raises(ParameterError, match=message):
+            mechanism_problem(rig, key)
+    controller = DrivenCamRig(rig_system, DRIVES["controller"])
+    with pytest.raises(ParameterError, match="must keep its sign"):
+        trace_mechanism(controller, "drive.integral", 0.1, -0.1)
+    with pytest.raises(ParameterError, match="drive.stall_torque > 0"):
+        trace_mechanism(motor, "drive.stall_torque", 1.0, -1.0)
+    with pytest.raises(ParameterError, match="static_friction is for two followers"):
+        mechanism_problem(motor, static_friction=0.5)
+
+
+@pytest.mark.parametrize("torque, bearing", [(0.001, 0.0), (0.05, 0.0)])
+def test_a_drive_without_a_steady_state_fails_in_one_clear_error(rig_system, torque, bearing):
+    """A constant torque below the load (the cam slows down and stops: the cam angle is
+    no longer a variable) or with no loss that grows with the speed (the cam speeds up
+    without bound): no orbit, and a SimulationError that says what a steady state needs."""
+    rig = DrivenCamRig(rig_system, CamDrive(3e-4, "constant", torque=torque, bearing_viscous=bearing))
+    with pytest.raises(SimulationError, match="periodic orbit only where its speed settles"):
+        trace_mechanism(rig, "drive.torque", torque, 1.1 * torque, max_points=3, transient=30)
+
+
+def run(argv):
+    """``camdyn ARGV``: its exit status, standard output and standard error."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        status = main([str(a) for a in argv])
+    return status, out.getvalue(), err.getvalue()
+
+
+def test_the_cli_continues_the_driven_cam(tmp_path):
+    """``camdyn continue driven_cam.toml`` continues in the motor's free speed (the drive
+    key that sets the speed) given in Hz: the JSON's parameter is in rad/s (2 pi 13.86),
+    its period the orbit's own, the time a plain time-domain run from its state takes to
+    turn once (to 1e-10 relative), not the starting speed's."""
+    out = tmp_path / "branch.nc"
+    status, text, err = run(["continue", EXAMPLE, "--from", "13.86Hz", "--to", "14Hz", "--max-points", "3",
+                             "--transient", "30", "--out", out, "--json"])
+    assert status == 0, err
+    doc = json.loads(text)
+    assert doc["summary"]["parameter"] == "drive.free_speed" and doc["summary"]["units"] == "rad/s"
+    first = doc["branches"][0][0]
+    assert abs(first["parameter"] - 2.0 * math.pi * 13.86) < 1e-12 * first["parameter"]
+    rig = mechanism_rig(load_mechanism(EXAMPLE))
+    theta0 = prepare(rig.system).theta0
+    y0 = time_state(np.array(first["state"]), np.array([0.0, 0.0, theta0, 0.0, 0.0, 0.0, 0.0, 0.0]), 2, rig.drive)
+    elapsed, _ = next_section(systems.DRIVEN_CAM, driven_p(rig.system, rig.drive), y0, 2, theta0 + 2.0 * math.pi)
+    assert abs(first["period"] - elapsed) < 1e-10 * elapsed
+    assert abs(first["period"] - 1.0 / 11.55) > 1e-3 / 11.55
+    assert len(first["state"]) == 3 and first["stable"] and out.stat().st_size > 0

@@ -13,16 +13,17 @@ from camdyn.cli.outputs import announce, check_outputs, emit_json
 from camdyn.errors import ParameterError
 
 
-def _value(text: str, key: str, unit: str) -> float:
-    """A parameter value [SI] from text with its unit (a bare number only for a
-    dimensionless parameter, as for ``--set``)."""
+def _value(text: str, key: str, unit: str, parameter: str = "") -> float:
+    """A value [SI] of ``parameter`` from text with its unit (a bare number only for a
+    dimensionless parameter, as for ``--set``; a drive key's as a mechanism file reads it,
+    an angular speed in Hz or rpm as turns); ``key`` names the option."""
     from camdyn.params.units import parse_quantity, parse_speed
 
-    if key.startswith("drive."):                  # a drive key, read as a mechanism file reads it
+    if parameter.startswith("drive."):
         from camdyn.params.mechanism import ANGULAR_SPEED, SCHEMA, angular_speed
-        if SCHEMA[key].unit == ANGULAR_SPEED:
+        if SCHEMA[parameter].unit == ANGULAR_SPEED:
             return angular_speed(text, key)
-        return float(parse_quantity(text, SCHEMA[key].unit, key))
+        return float(parse_quantity(text, SCHEMA[parameter].unit, key))
     if unit == "Hz":
         return parse_speed(text, key)
     return float(parse_quantity(text, unit, key))
@@ -85,7 +86,7 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                                      doublings, brute_force, plot, out, quiet, json_)
         return
     system, parameter, unit, mechanism = _load(source, set_, parameter, brute_force)
-    first, last = _value(start, "--from", unit), _value(stop, "--to", unit)
+    first, last = _value(start, "--from", unit, parameter), _value(stop, "--to", unit, parameter)
     if first == last:
         raise ParameterError("--from and --to must differ")
     from camdyn.continuation.branches import MIN_STEP
