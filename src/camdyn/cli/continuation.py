@@ -12,6 +12,10 @@ from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, err_c
 from camdyn.cli.outputs import announce, check_outputs, emit_json
 from camdyn.errors import ParameterError
 
+_PARAMETER_HELP = ("Dotted key continued, e.g. motion.speed (the default), cam.runout (camdyn presets keys); for a "
+                   "cam under its drive a drive key (default the one that sets its speed: drive.torque, "
+                   "drive.free_speed or drive.target_speed).")
+
 
 def _value(text: str, key: str, unit: str, parameter: str = "") -> float:
     """A value [SI] of ``parameter`` from text with its unit (a bare number only for a
@@ -31,10 +35,7 @@ def _value(text: str, key: str, unit: str, parameter: str = "") -> float:
 
 def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                     set_: Optional[List[str]] = SetOption,
-                    parameter: Optional[str] = typer.Option(
-                        None, help="Dotted key continued, e.g. motion.speed (the default), cam.runout (camdyn "
-                                   "presets keys); for a cam under its drive a drive key (default the one that sets "
-                                   "its speed: drive.torque, drive.free_speed or drive.target_speed)."),
+                    parameter: Optional[str] = typer.Option(None, help=_PARAMETER_HELP),
                     start: str = typer.Option(..., "--from", help="First value, with a unit: 5Hz, 1.2mm."),
                     stop: str = typer.Option(..., "--to", help="Last value, with a unit."),
                     period: int = typer.Option(1, help="Forcing periods per orbit period (2 for period-2 orbits)."),
@@ -64,12 +65,9 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     followed (docs/continuation.md). A translating follower (the preset alzate) is
     continued in motion.speed, its orbits taken at cam angle 0. A mechanism file (the
     flexible pivot, or two followers with drive.kind = 'prescribed') is continued in a
-    system key or, for the flexible pivot, pivot.stiffness or pivot.damping. The driven
-    cam and two followers under a torque, a motor or a controller are autonomous: their
-    orbits are taken on the section at the starting cam angle, their period (the time
-    for k turns) is an unknown, and they are continued in a drive key (drive.torque,
-    drive.free_speed, drive.target_speed, drive.shaft_inertia, ...) or a key of the cam
-    or the followers."""
+    system key or, for the flexible pivot, pivot.stiffness or pivot.damping; a cam under
+    its drive (its orbits on the section at its starting angle, their period unknown) in
+    a drive key (drive.free_speed, drive.shaft_inertia, ...) or the cam's or followers'."""
     from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset, switch_doublings
 
     check_outputs(netcdf=out, figure=plot, force=force)
@@ -82,8 +80,8 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
             raise ParameterError("--segments is for the cam-follower; the translating follower is continued by "
                                  "single shooting")
         from camdyn.cli.translating import continue_translating_command
-        continue_translating_command(source, set_, parameter or "motion.speed", start, stop, period, step, max_points, transient,
-                                     doublings, brute_force, plot, out, quiet, json_)
+        continue_translating_command(source, set_, parameter or "motion.speed", start, stop, period, step, max_points,
+                                     transient, doublings, brute_force, plot, out, quiet, json_)
         return
     system, parameter, unit, mechanism = _load(source, set_, parameter, brute_force)
     first, last = _value(start, "--from", unit, parameter), _value(stop, "--to", unit, parameter)

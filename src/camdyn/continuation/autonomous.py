@@ -37,8 +37,8 @@ import numpy as np
 from camdyn.continuation.problem import Problem, parameter_unit
 from camdyn.errors import ParameterError
 from camdyn.model import cam_angle, contact
-from camdyn.model import two_followers as pair
 from camdyn.model import layout as L
+from camdyn.model import two_followers as pair
 from camdyn.params.schema import parameter_index
 from camdyn.params.system import System
 from camdyn.simulation import limits
@@ -122,8 +122,8 @@ def _key(rig, key: str) -> tuple[str, float, bool]:
     if key in DRIVE_KEYS:
         unit, kinds = DRIVE_KEYS[key]
         if kinds is not None and rig.drive.kind not in kinds:
-            raise ParameterError(f"{key} does not enter a {rig.drive.kind!r} drive; its keys are "
-                                 f"{', '.join(k for k, (_, s) in DRIVE_KEYS.items() if s is None or rig.drive.kind in s)}")
+            own = [k for k, (_, entered) in DRIVE_KEYS.items() if entered is None or rig.drive.kind in entered]
+            raise ParameterError(f"{key} does not enter a {rig.drive.kind!r} drive; its keys are {', '.join(own)}")
         value = float(getattr(rig.drive, key.split(".", 1)[1]))
         if not math.isfinite(value):
             raise ParameterError(f"{key} has no finite value to start from")

@@ -22,8 +22,8 @@ from camdyn.simulation import limits
 from camdyn.simulation.runner import METHODS, default_max_step, prepare
 from camdyn.systems import registry as systems
 
-__all__ = ["CamDrive", "DrivenCamRig", "simulate_driven_cam", "simulate_stick_slip", "speed_fluctuation", "tabulated_motion",
-           "simulate_tabulated", "run_mechanism"]
+__all__ = ["CamDrive", "DrivenCamRig", "simulate_driven_cam", "simulate_stick_slip", "speed_fluctuation",
+           "tabulated_motion", "simulate_tabulated", "run_mechanism"]
 
 
 @dataclasses.dataclass(frozen=True)
