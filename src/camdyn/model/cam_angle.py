@@ -106,10 +106,10 @@ def rhs(which, theta, s, mode, p, dsdtheta):
     dydt = np.empty(n)
     _time_rhs(which, t, y, mode, p, dydt)
     speed = y[angle_slot(which) + 1]
-    scale = 1.0 / speed if speed > 0.0 else np.nan
+    scale = 1.0 / speed if speed > 0.0 else np.nan     # dt/dTheta, eq (1)
     to_angle(dydt, 1.0, which, dsdtheta)    # the time's rate dt/dt = 1 in its slot, scaled below
     for i in range(n):
-        dsdtheta[i] *= scale
+        dsdtheta[i] *= scale                            # dx/dTheta = (dx/dt) (dt/dTheta), eq (1)
 
 
 @numba.njit(cache=True)
@@ -157,7 +157,7 @@ def guards(which, theta, s, f, known, p, values, rates):
     else:
         pair.guards(t, y, g, known, p, values, rates)
     for k in range(rates.shape[0]):
-        rates[k] /= speed
+        rates[k] /= speed                               # dg/dTheta = (dg/dt) / Theta_dot, eq (1)
 
 
 @numba.njit(cache=True)
