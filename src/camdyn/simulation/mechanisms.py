@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time as _time
+import typing
 
 import numpy as np
 import xarray as xr
@@ -21,8 +22,8 @@ from camdyn.simulation import limits
 from camdyn.simulation.runner import METHODS, default_max_step, prepare
 from camdyn.systems import registry as systems
 
-__all__ = ["CamDrive", "simulate_driven_cam", "simulate_stick_slip", "speed_fluctuation", "tabulated_motion",
-           "simulate_tabulated", "run_mechanism"]
+__all__ = ["CamDrive", "DrivenCamRig", "simulate_driven_cam", "simulate_stick_slip", "speed_fluctuation",
+           "tabulated_motion", "simulate_tabulated", "run_mechanism"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -98,6 +99,15 @@ class CamDrive:
         return np.array([self.shaft_inertia, driven_cam.DRIVE_KINDS[self.kind], self.torque, self.stall_torque,
                          self.free_speed, self.proportional, self.integral, self.target_speed,
                          self.bearing_viscous, self.bearing_coulomb, self.bearing_speed])
+
+
+class DrivenCamRig(typing.NamedTuple):
+    """The driven cam: the arguments of :func:`simulate_driven_cam`, ``system`` (the
+    cam-follower; its constant motion gives the starting cam angle and speed) and
+    ``drive`` (:class:`CamDrive`)."""
+
+    system: System
+    drive: CamDrive
 
 
 #: The driven cam's state: name, unit, long name, in the state's order.
