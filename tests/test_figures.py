@@ -273,9 +273,11 @@ def test_spectrum_shows_the_harmonic_band_and_marks_what_the_summary_lists(tmp_p
 
 def test_the_peaks_left_out_are_integration_noise():
     """Why the threshold: in sustained contact with 1 % damping (thesis fig 2.10's
-    stand-in) the largest peak near the natural frequency falls 30-fold when the
-    tolerance tightens from 1e-8 to 1e-10, so it measures the solver, not the rig; it lies
-    below 1e-4 of the first cam harmonic, under the threshold."""
+    stand-in) the largest peak near the natural frequency falls tenfold and more when the
+    tolerance tightens from 1e-8 to 1e-10 (measured: 29-fold with the stabilized step
+    control, over 30-fold before it), where a peak of the rig's own response would stay
+    put, so it measures the solver, not the rig; it lies below 1e-4 of the first cam
+    harmonic, under the threshold."""
     from camdyn.analysis.harmonics import amplitude_spectrum
     rig = camdyn.load_system("alzate2007-standin").with_values(**FIG_2_10)
     levels = []
@@ -285,7 +287,7 @@ def test_the_peaks_left_out_are_integration_noise():
         fn = ds.attrs["natural_frequency_Hz"]
         levels.append(amp[np.abs(freq - fn) < 0.05 * fn].max())
         assert spectrum_summary(ds, window=8)["peaks"] == []
-    assert levels[0] > 30 * levels[1]
+    assert levels[0] > 10 * levels[1]
     assert levels[0] < 1e-4 * spectrum_summary(ds, window=8)["harmonics"][0]["amplitude"]
 
 

@@ -204,11 +204,11 @@ def test_a_short_continuation_in_the_cam_speed(pair_problem, pair_orbit):
         assert np.max(np.abs(end - orbit.state) / (1.0 + np.abs(orbit.state))) < 1e-8
 
 
-def test_the_problem_refuses_what_has_no_fixed_period():
+def test_the_problem_refuses_what_it_does_not_take():
     rig = drum_brake()
-    with pytest.raises(ParameterError, match="no fixed period"):
-        mechanism_problem(rig)                                              # a torque-driven shaft
-    with pytest.raises(ParameterError, match="driven cam has no fixed period"):
+    with pytest.raises(ParameterError, match="sets only where the driven cam starts"):
+        mechanism_problem(rig, "motion.speed")                              # a torque-driven shaft: a state
+    with pytest.raises(ParameterError, match="got System"):
         mechanism_problem(load_system(FRICTION))
     with pytest.raises(ParameterError, match="unknown parameter"):
         mechanism_problem(prescribed_pair(), "cam.nonsense")
@@ -225,8 +225,10 @@ def run(argv):
 
 
 @pytest.mark.parametrize("source, arguments, message", [
-    ("drum_brake.toml", [], "no fixed period"),
-    ("driven_cam.toml", [], "driven cam has no fixed period"),
+    ("drum_brake.toml", ["--parameter", "motion.speed"], "sets only where the driven cam starts"),
+    ("driven_cam.toml", ["--parameter", "motion.speed"], "sets only where the driven cam starts"),
+    ("driven_cam.toml", ["--parameter", "drive.torque"], "does not enter a 'motor' drive"),
+    ("two_followers_prescribed.toml", ["--parameter", "drive.torque"], "a key of a cam under its drive"),
     ("two_followers_prescribed.toml", ["--parameter", "pivot.stiffness"], "flexible pivot only"),
     ("two_followers_prescribed.toml", ["--brute-force", "5"], "not offered for a mechanism"),
     ("flexible_pivot.toml", ["--set", "pivot.stiffness=-1N/m"], "pivot.stiffness"),

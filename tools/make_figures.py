@@ -20,6 +20,7 @@ Jobs (default: all but the slow ones):
   tests/data/siconos_camfollower.json);
 - ``flexible_pivot``: ``python examples/flexible_pivot.py`` -> flexible_pivot_resonance.png;
 - ``two_followers``: ``python examples/two_followers.py`` -> two_followers_stick_slip.png;
+- ``driven_cam``: ``python examples/driven_cam_orbits.py`` -> driven_cam_doubling.png;
 - slow (``--slow``, about 26 minutes more): ``friction_tables``, ``impact_tables``,
   ``gallery`` (the rest of chapter 2) and ``translating`` (the bifurcation diagram of the
   translating follower's rig, translating_bifurcation.png). The first three also rewrite
@@ -71,6 +72,7 @@ SOURCES = {
     "continuation_curves.png": "camdyn map sundar2014-impact --x cam.runout=1.5mm:3.5mm:9 "
                                "--y speed=14Hz:17.5Hz:15 --curve period-doubling=16.99Hz",
     "two_followers_stick_slip.png": "python examples/two_followers.py",
+    "driven_cam_doubling.png": "python examples/driven_cam_orbits.py",
     "translating_bifurcation.png": "python examples/translating_bifurcation.py",
     "translating_branches.png": "python examples/translating_bifurcation.py",
     "translating_branches_358.png": "python examples/translating_bifurcation.py",
@@ -240,7 +242,8 @@ JOBS = {"demo": job_demo, "sweeps": job_sweeps, "fig2_9": job_fig2_9,
         "siconos": _script("siconos_comparison.py", ("siconos_camfollower.png",), data=True),
         "flexible_pivot": _script("flexible_pivot.py", ("flexible_pivot_resonance.png",), data=True),
         "curves": job_curves,
-        "two_followers": _script("two_followers.py", ("two_followers_stick_slip.png",), data=True)}
+        "two_followers": _script("two_followers.py", ("two_followers_stick_slip.png",), data=True),
+        "driven_cam": _script("driven_cam_orbits.py", ("driven_cam_doubling.png",), data=True)}
 SLOW = {"friction_tables": _script("friction_error_tables.py", ("friction_errors.png",), data=True),
         "impact_tables": _script("impact_damping_tables.py",
                                  ("impact_hysteresis.png", "impact_residue_landscape.png", "restitution_fit.png")),

@@ -12,12 +12,22 @@ from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, err_c
 from camdyn.cli.outputs import announce, check_outputs, emit_json
 from camdyn.errors import ParameterError
 
+_PARAMETER_HELP = ("Dotted key continued, e.g. motion.speed (the default), cam.runout (camdyn presets keys); for a "
+                   "cam under its drive a drive key (default the one that sets its speed: drive.torque, "
+                   "drive.free_speed or drive.target_speed).")
 
-def _value(text: str, key: str, unit: str) -> float:
-    """A parameter value [SI] from text with its unit (a bare number only for a
-    dimensionless parameter, as for ``--set``)."""
+
+def _value(text: str, key: str, unit: str, parameter: str = "") -> float:
+    """A value [SI] of ``parameter`` from text with its unit (a bare number only for a
+    dimensionless parameter, as for ``--set``; a drive key's as a mechanism file reads it,
+    an angular speed in Hz or rpm as turns); ``key`` names the option."""
     from camdyn.params.units import parse_quantity, parse_speed
 
+    if parameter.startswith("drive."):
+        from camdyn.params.mechanism import ANGULAR_SPEED, SCHEMA, angular_speed
+        if SCHEMA[parameter].unit == ANGULAR_SPEED:
+            return angular_speed(text, key)
+        return float(parse_quantity(text, SCHEMA[parameter].unit, key))
     if unit == "Hz":
         return parse_speed(text, key)
     return float(parse_quantity(text, unit, key))
@@ -25,8 +35,7 @@ def _value(text: str, key: str, unit: str) -> float:
 
 def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                     set_: Optional[List[str]] = SetOption,
-                    parameter: str = typer.Option("motion.speed", help="Dotted key continued, e.g. motion.speed, "
-                                                                       "cam.runout (camdyn presets keys)."),
+                    parameter: Optional[str] = typer.Option(None, help=_PARAMETER_HELP),
                     start: str = typer.Option(..., "--from", help="First value, with a unit: 5Hz, 1.2mm."),
                     stop: str = typer.Option(..., "--to", help="Last value, with a unit."),
                     period: int = typer.Option(1, help="Forcing periods per orbit period (2 for period-2 orbits)."),
@@ -56,7 +65,9 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     followed (docs/continuation.md). A translating follower (the preset alzate) is
     continued in motion.speed, its orbits taken at cam angle 0. A mechanism file (the
     flexible pivot, or two followers with drive.kind = 'prescribed') is continued in a
-    system key or, for the flexible pivot, pivot.stiffness or pivot.damping."""
+    system key or, for the flexible pivot, pivot.stiffness or pivot.damping; a cam under
+    its drive (its orbits on the section at its starting angle, their period unknown) in
+    a drive key (drive.free_speed, drive.shaft_inertia, ...) or the cam's or followers'."""
     from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset, switch_doublings
 
     check_outputs(netcdf=out, figure=plot, force=force)
@@ -69,11 +80,11 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
             raise ParameterError("--segments is for the cam-follower; the translating follower is continued by "
                                  "single shooting")
         from camdyn.cli.translating import continue_translating_command
-        continue_translating_command(source, set_, parameter, start, stop, period, step, max_points, transient,
-                                     doublings, brute_force, plot, out, quiet, json_)
+        continue_translating_command(source, set_, parameter or "motion.speed", start, stop, period, step, max_points,
+                                     transient, doublings, brute_force, plot, out, quiet, json_)
         return
-    system, unit, mechanism = _load(source, set_, parameter, brute_force)
-    first, last = _value(start, "--from", unit), _value(stop, "--to", unit)
+    system, parameter, unit, mechanism = _load(source, set_, parameter, brute_force)
+    first, last = _value(start, "--from", unit, parameter), _value(stop, "--to", unit, parameter)
     if first == last:
         raise ParameterError("--from and --to must differ")
     from camdyn.continuation.branches import MIN_STEP
@@ -146,25 +157,30 @@ def _brute_force(source, set_, parameter, first, last, count, quiet):
 
 
 def _load(source, set_, parameter, brute_force):
-    """``(system, unit, mechanism)``: the cam-follower, or a mechanism's rig
-    (``mechanism`` True), and the continued parameter's unit."""
+    """``(system, parameter, unit, mechanism)``: the cam-follower, or a mechanism's rig
+    (``mechanism`` True), the continued parameter (its default where None) and its unit."""
+    from camdyn.continuation.autonomous import default_key, is_autonomous
     from camdyn.continuation.problem import parameter_unit
     from camdyn.params.mechanism import is_mechanism
 
     if not is_mechanism(source):
         system = load_source(source, set_)
-        return system, parameter_unit(system, parameter), False
+        parameter = parameter or "motion.speed"
+        return system, parameter, parameter_unit(system, parameter), False
     from camdyn.io.mechanism_config import load_mechanism, mechanism_rig
     from camdyn.params.config import parse_assignments
 
     if brute_force:
         raise ParameterError("--brute-force sweeps the cam-follower; it is not offered for a mechanism")
     rig = mechanism_rig(load_mechanism(source, parse_assignments(set_)))
-    return rig, _mechanism_unit(rig, parameter), True
+    parameter = parameter or (default_key(rig) if is_autonomous(rig) else "motion.speed")
+    return rig, parameter, _mechanism_unit(rig, parameter), True
 
 
 def _mechanism_unit(rig, parameter: str) -> str:
-    """The unit of a mechanism's continued parameter (a bearing key or the system's)."""
+    """The unit of a mechanism's continued parameter (a bearing key, a drive key or the
+    system's)."""
+    from camdyn.continuation.autonomous import DRIVE_KEYS, is_autonomous, key_unit
     from camdyn.continuation.mechanisms import BEARING_KEYS
     from camdyn.continuation.problem import parameter_unit
     from camdyn.simulation.flexible_pivot import FlexiblePivotRig
@@ -173,6 +189,11 @@ def _mechanism_unit(rig, parameter: str) -> str:
         if not isinstance(rig, FlexiblePivotRig):
             raise ParameterError(f"{parameter} is a key of the flexible pivot only")
         return BEARING_KEYS[parameter]
+    if is_autonomous(rig):
+        return key_unit(rig, parameter)
+    if parameter in DRIVE_KEYS:
+        raise ParameterError(f"{parameter} is a key of a cam under its drive (the driven cam, or two followers "
+                             "whose drive.kind is not 'prescribed')")
     return parameter_unit(rig.system, parameter)
 
 

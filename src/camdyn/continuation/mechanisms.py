@@ -1,12 +1,15 @@
-"""The periodic problem of the mechanisms whose cam turns at a prescribed constant speed:
-the rocking follower on a flexible pivot bearing (:mod:`camdyn.model.flexible_pivot`,
-:class:`~camdyn.simulation.flexible_pivot.FlexiblePivotRig`) and two rocking followers on
-one cam held at its speed (:mod:`camdyn.model.two_followers` with the drive kind
-``"prescribed"``, :class:`~camdyn.simulation.two_followers.TwoFollowerRig`).
+"""The periodic problem of the mechanisms: the rocking follower on a flexible pivot
+bearing (:mod:`camdyn.model.flexible_pivot`,
+:class:`~camdyn.simulation.flexible_pivot.FlexiblePivotRig`), two rocking followers on one
+cam (:mod:`camdyn.model.two_followers`, :class:`~camdyn.simulation.two_followers.TwoFollowerRig`)
+and the driven cam (:mod:`camdyn.model.driven_cam`,
+:class:`~camdyn.simulation.mechanisms.DrivenCamRig`).
 
-Both are forced with the cam's period ``T = 1 / speed`` [s], so their periodic orbits are
-the fixed points of the period map, found and continued by the shooting methods of
-:mod:`~camdyn.continuation.orbits` and :mod:`~camdyn.continuation.branches` unchanged:
+The flexible pivot and two followers held at a prescribed speed (the drive kind
+``"prescribed"``) are forced with the cam's period ``T = 1 / speed`` [s], so their
+periodic orbits are the fixed points of the period map, found and continued by the
+shooting methods of :mod:`~camdyn.continuation.orbits` and
+:mod:`~camdyn.continuation.branches` unchanged:
 
 - the flexible pivot's unknowns are ``(alpha [rad], alpha_dot [rad/s], u [m], u_dot [m/s],
   v [m], v_dot [m/s])``, the follower and its bearing; the works are quadratures;
@@ -18,9 +21,15 @@ the fixed points of the period map, found and continued by the shooting methods 
   the identity (``Theta_ddot = 0`` whatever the followers do), so the followers' block is
   the monodromy matrix.
 
-The driven cam (:mod:`camdyn.model.driven_cam`) and two followers on a shaft under a
-torque, a motor or a controller are refused: their cam's speed is a state that settles
-(or not) where the load lets it, so they have no fixed forcing period.
+The driven cam and two followers on a shaft under a torque, a motor or a PI controller
+are autonomous: their cam's speed is a state that settles where the drive and the load
+balance, and their steady states repeat in the cam angle over a period that is an
+unknown. They are solved in the cam angle, on the section at the starting cam angle
+(:mod:`~camdyn.continuation.autonomous`): the unknowns are the followers' angles and
+rates, the cam's speed and, under a PI controller with an integral gain, its integral;
+the parameter is a drive key (:data:`~camdyn.continuation.autonomous.DRIVE_KEYS`) or a
+key of the cam or the followers; an orbit's ``period`` is the time its cam takes to turn
+``2 pi k`` [s].
 """
 
 from __future__ import annotations
@@ -30,11 +39,12 @@ from collections.abc import Callable
 
 import numpy as np
 
+from camdyn.continuation.autonomous import autonomous_problem, is_autonomous
 from camdyn.continuation.branches import Branch, continue_orbits
 from camdyn.continuation.orbits import Orbit, find_orbit
 from camdyn.continuation.problem import Problem, parameter_unit
 from camdyn.continuation.results import check_trace_settings
-from camdyn.errors import ParameterError
+from camdyn.errors import ParameterError, SimulationError
 from camdyn.model import contact
 from camdyn.model import layout as L
 from camdyn.params.schema import parameter_index
@@ -120,11 +130,8 @@ def _pair_problem(rig: TwoFollowerRig, key: str, initial_state, static_friction,
     """Two followers' problem (module docstring): ``key`` moves the cam of both, or a
     follower's setting of both where the two followers are the same system, else of
     follower 1 only."""
-    if not isinstance(rig.drive, CamDrive) or rig.drive.kind != "prescribed":
-        kind = getattr(rig.drive, "kind", None)
-        raise ParameterError(f"two followers on a shaft under a {kind!r} drive have no fixed period (the cam's "
-                             "speed is a state that settles where the load lets it); hold the cam at its speed "
-                             "with drive.kind = 'prescribed'")
+    if not isinstance(rig.drive, CamDrive):
+        raise ParameterError(f"the two followers' drive must be a CamDrive, got {type(rig.drive).__name__}")
     unit, value = _system_key(rig.system, key)
     both = rig.second == rig.system or key.startswith(("cam.", "motion."))
 
@@ -164,22 +171,26 @@ def _pair_problem(rig: TwoFollowerRig, key: str, initial_state, static_friction,
                    template_at=template_at)
 
 
-def mechanism_problem(rig, key: str = "motion.speed", initial_state=None, static_friction=None,
+def mechanism_problem(rig, key: str | None = None, initial_state=None, static_friction=None,
                       rtol: float = 1e-10, atol: float = 1e-12) -> Problem:
-    """The periodic problem of a mechanism whose cam turns at a prescribed constant speed,
-    over one cam period ``1 / speed`` [s], the scalar parameter being ``key``.
+    """The periodic problem of a mechanism (module docstring), the scalar parameter being
+    ``key``: over one cam period ``1 / speed`` [s] for a cam at a prescribed speed, over one
+    turn of the cam ``2 pi`` [rad] in the cam angle for a cam under its drive.
 
     Parameters
     ----------
-    rig : FlexiblePivotRig or TwoFollowerRig
+    rig : FlexiblePivotRig, TwoFollowerRig or DrivenCamRig
         The flexible pivot (:func:`~camdyn.simulation.flexible_pivot.chapter3_flexible_pivot`),
-        or two followers whose drive is ``CamDrive(..., kind="prescribed")``
-        (:func:`camdyn.io.mechanism_config.mechanism_rig` builds either from a
+        two followers (:func:`~camdyn.simulation.two_followers.drum_brake`) or the driven
+        cam (:func:`camdyn.io.mechanism_config.mechanism_rig` builds each from a
         mechanism file).
-    key : str
-        The dotted key of the system (``motion.speed`` in [Hz], ``cam.runout`` in [m],
-        ...), or for the flexible pivot ``pivot.stiffness`` [N/m] or ``pivot.damping``
-        [N s/m].
+    key : str, optional
+        The dotted key of the system (``motion.speed`` in [Hz], the default for a cam at a
+        prescribed speed; ``cam.runout`` in [m], ...), for the flexible pivot
+        ``pivot.stiffness`` [N/m] or ``pivot.damping`` [N s/m], and for a cam under its
+        drive a key of :data:`~camdyn.continuation.autonomous.DRIVE_KEYS` (default the one
+        that sets the speed: ``drive.torque`` [N m], ``drive.free_speed`` [rad/s] or
+        ``drive.target_speed`` [rad/s]) or of the cam or the followers.
     initial_state : array_like, optional
         The unknowns to start from (module docstring); default the static equilibrium.
     static_friction : float or (float, float), optional
@@ -187,12 +198,12 @@ def mechanism_problem(rig, key: str = "motion.speed", initial_state=None, static
         :func:`~camdyn.simulation.two_followers.pack_two_followers`.
     rtol, atol : float
         Tolerances of the plain runs (every residual); the variational runs (the
-        monodromy matrix only) use ``100 rtol, 100 atol`` for two followers (as
-        :func:`~camdyn.continuation.problem.system_problem`) and ``1000 rtol, 1000 atol``
-        for the flexible pivot, whose matrix carries the bearing's modes (tens of kHz on
-        a stiff bearing): on the chapter 4 rig at 11.55 Hz on 1e9 N/m a variational run
-        takes 29 s at ``rtol = 1e-8`` and 2.5 s at ``1e-7``, the multipliers moving by
-        less than 1e-11 (measured).
+        monodromy matrix only) use ``100 rtol, 100 atol`` for two followers and the driven
+        cam (as :func:`~camdyn.continuation.problem.system_problem`) and
+        ``1000 rtol, 1000 atol`` for the flexible pivot, whose matrix carries the
+        bearing's modes (tens of kHz on a stiff bearing): on the chapter 4 rig at
+        11.55 Hz on 1e9 N/m a variational run takes 29 s at ``rtol = 1e-8`` and 2.5 s at
+        ``1e-7``, the multipliers moving by less than 1e-11 (measured).
 
     Returns
     -------
@@ -205,20 +216,22 @@ def mechanism_problem(rig, key: str = "motion.speed", initial_state=None, static
     Raises
     ------
     ParameterError
-        For another mechanism (the driven cam has no fixed period), a drive that is not
-        prescribed, an unknown or non-continuous key, a motion that is not constant, a
-        bad bearing or start; all before any work.
+        For another object, an unknown or non-continuous key (or one that does not enter
+        the mechanism), a motion that is not constant, a bad bearing, a drive that cannot
+        keep the cam turning forward, or a bad start; all before any work.
     """
     limits.check_tolerances(rtol, atol)
+    if is_autonomous(rig):
+        return autonomous_problem(rig, key, initial_state, static_friction, rtol, atol)
+    key = "motion.speed" if key is None else key
     if isinstance(rig, FlexiblePivotRig):
         if static_friction is not None:
             raise ParameterError("static_friction is for two followers; the flexible pivot has no stick phase")
         return _pivot_problem(rig, key, initial_state, rtol, atol)
     if isinstance(rig, TwoFollowerRig):
         return _pair_problem(rig, key, initial_state, static_friction, rtol, atol)
-    raise ParameterError(f"periodic orbits are found on the flexible pivot and on two followers held at a prescribed "
-                         f"cam speed; got {type(rig).__name__} (the driven cam has no fixed period: its speed is a "
-                         "state that settles where the drive and the load balance)")
+    raise ParameterError(f"periodic orbits are found on the flexible pivot, two followers and the driven cam; got "
+                         f"{type(rig).__name__}")
 
 
 def trace_mechanism(rig, key: str, start: float, stop: float, periods: int = 1, step: float = 0.02,
@@ -226,8 +239,8 @@ def trace_mechanism(rig, key: str, start: float, stop: float, periods: int = 1, 
                     progress: Callable[[Orbit], None] | None = None, segments: int = 1) -> tuple[Problem, Branch]:
     """The branch of period-``periods`` orbits of a mechanism (:func:`mechanism_problem`)
     from ``key`` [SI unit] at ``start`` towards ``stop``: the orbit at ``start`` after
-    ``transient`` cam periods from the static equilibrium and Newton's method, then
-    pseudo-arclength continuation, as
+    ``transient`` cam periods (turns of the cam, for a cam under its drive) from the
+    static equilibrium and Newton's method, then pseudo-arclength continuation, as
     :func:`~camdyn.continuation.results.trace_branch` does for the cam-follower.
 
     Raises
@@ -235,13 +248,22 @@ def trace_mechanism(rig, key: str, start: float, stop: float, periods: int = 1, 
     ParameterError
         For a bad mechanism, key, range or setting, before any work.
     SimulationError
-        If no orbit is found at ``start``.
+        If no orbit is found at ``start``; for a cam under its drive, also where the cam
+        stops or turns back in the transient, or where its speed does not settle (a
+        constant torque that no loss growing with the speed balances).
     """
     check_trace_settings(start, stop, periods, segments, transient, max_points, step, "cam periods")
     problem = mechanism_problem(rig, key, rtol=rtol, atol=rtol * 1e-2)
     problem.build(start)                                      # refuse an end value the mechanism cannot take
     problem.build(stop)
-    orbit = find_orbit(problem, value=start, periods=int(periods), transient=transient, segments=int(segments))
+    try:
+        orbit = find_orbit(problem, value=start, periods=int(periods), transient=transient, segments=int(segments))
+    except SimulationError as error:
+        if problem.clock is None:
+            raise
+        raise SimulationError(f"{error} (a cam under its drive has a periodic orbit only where its speed settles: "
+                              "the drive must keep it turning forward against the load, and a loss that grows with "
+                              "the speed, such as drive.bearing_viscous, must balance a constant torque)") from None
     branch = continue_orbits(problem, orbit, stop, step=step, max_step=max(step, 0.1), max_points=max_points,
                              progress=progress)
     return problem, branch

@@ -81,6 +81,9 @@ class Flow:
         The integrator's steps, accepted and rejected (0 where not counted).
     contact_times : ndarray or None
         Times of the events on the contact guard (guard 0), onsets and ends [s].
+    elapsed : float
+        The advance of the problem's clock component over the run [s]
+        (:attr:`Problem.clock`; NaN without one).
     """
 
     end: np.ndarray
@@ -93,6 +96,7 @@ class Flow:
     modes: np.ndarray
     steps: int = 0
     contact_times: np.ndarray | None = None
+    elapsed: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -109,7 +113,9 @@ class Orbit:
     parameter : float
         The scalar parameter's value [its unit].
     period : float
-        The orbit's period ``k T`` [s].
+        The orbit's period [s]: ``k T``, or for an autonomous mechanism (whose forcing
+        period ``T`` is ``2 pi`` in the cam angle) the time its cam takes to turn
+        ``2 pi k`` (:attr:`~camdyn.continuation.problem.Problem.clock`).
     periods : int
         ``k``: forcing periods per orbit period.
     multipliers : ndarray (u,) complex
@@ -202,7 +208,8 @@ def _variational(problem: Problem, p, period, x, value, t0, t1, samples, max_ste
     return Flow(y[-1, :u].copy(), matrix, int(on_contact.sum()), int(counters[driver.COUNT_EVENTS]),
                 _guard_minimum(problem.system_id, p, times, states) if samples else math.nan, states, times, modes,
                 int(counters[driver.COUNT_ACCEPTED] + counters[driver.COUNT_REJECTED]),
-                log[log[:, driver.EVENT_GUARD] == 0, driver.EVENT_TIME].copy())
+                log[log[:, driver.EVENT_GUARD] == 0, driver.EVENT_TIME].copy(),
+                math.nan if problem.clock is None else float(y[-1, problem.clock] - y0[problem.clock]))
 
 
 def _guard_minimum(system_id: int, p: np.ndarray, times: np.ndarray, states: np.ndarray) -> float:
@@ -260,7 +267,8 @@ def make_orbit(problem: Problem, x, value, periods, run: Flow, iterations, resid
     values = values[np.argsort(-np.abs(values), kind="stable")]
     p, period = problem.build(value)
     force, sliding = contact_margins(problem.system_id, p, run.times, run.states, run.modes)
-    return Orbit(np.asarray(x, float).copy(), _full(problem, x, value), float(value), float(periods * period),
+    own = periods * period if problem.clock is None else run.elapsed       # the time to turn 2 pi k
+    return Orbit(np.asarray(x, float).copy(), _full(problem, x, value), float(value), float(own),
                  periods, values,
                  bool(np.all(np.abs(values) < 1.0 - STABILITY_MARGIN)), run.impacts, iterations, residual,
                  run.guard_minimum, run.matrix, force, sliding,
@@ -387,7 +395,8 @@ def _join(problem: Problem, p: np.ndarray, runs: list[Flow], matrix: np.ndarray)
     modes = np.concatenate([runs[0].modes] + [run.modes[1:] for run in runs[1:]])
     return Flow(runs[-1].end, matrix, sum(run.impacts for run in runs), sum(run.events for run in runs),
                 _guard_minimum(problem.system_id, p, times, states), states, times, modes,
-                contact_times=np.concatenate([run.contact_times for run in runs]))
+                contact_times=np.concatenate([run.contact_times for run in runs]),
+                elapsed=sum(run.elapsed for run in runs))
 
 
 def segment_ends(problem: Problem, states, value: float, periods: int = 1) -> np.ndarray:
@@ -418,7 +427,8 @@ def segment_runs(problem: Problem, states, value: float, periods: int = 1,
     matrix = multiple.monodromy(matrices)
     if not sampled:
         return Flow(runs[-1].end, matrix, sum(run.impacts for run in runs), sum(run.events for run in runs),
-                    math.nan, runs[-1].states, runs[-1].times, runs[-1].modes), matrices
+                    math.nan, runs[-1].states, runs[-1].times, runs[-1].modes,
+                    elapsed=sum(run.elapsed for run in runs)), matrices
     return _join(problem, p, runs, matrix), matrices
 
 

@@ -92,6 +92,7 @@ class Problem:
     matrix_rtol: float | None = None
     matrix_atol: float | None = None
     template_at: Callable[[float], np.ndarray] | None = field(default=None, compare=False)
+    clock: int | None = None
 
     def full_state(self, x, value: float) -> np.ndarray:
         """The full state (n,) from the unknowns ``x`` at the scalar parameter ``value``:

@@ -17,6 +17,14 @@ from camdyn.continuation.switching import switch_branch
 from camdyn.errors import CamdynError, ParameterError
 from camdyn.params.system import System
 
+#: The first period-``2k`` orbit's distance from a period doubling (scaled,
+#: :func:`~camdyn.continuation.switching.doubled_orbit`) for a cam under its drive
+#: (:attr:`Problem.clock` set): on the chapter 3 impact rig on a motor (3e-4 kg m^2,
+#: doubling at a mean cam speed of 16.18 Hz) Newton's steps at 1e-3 stalled at 5.6e-10,
+#: above its tolerance (the residual's noise in the cam's speed, carried into the
+#: parameter's column by its central difference), and converged at 1e-2 [-].
+AUTONOMOUS_AMPLITUDE = 1e-2
+
 __all__ = ["check_trace_settings", "trace_branch", "switch_doublings", "orbit_record", "branch_records",
            "bifurcation_records", "branches_dataset"]
 
@@ -68,7 +76,8 @@ def switch_doublings(problem: Problem, branch: Branch, stop: float, levels: int 
     period-``2k`` branch (:func:`~camdyn.continuation.switching.switch_branch`) continued
     towards ``stop``, and on those their own doublings, down to ``levels`` doublings
     (1: the period-2 branches only). A doubling whose switch fails (the corrector does
-    not converge next to it) is skipped. Returns the new branches, parents first."""
+    not converge next to it) is skipped. Returns the new branches, parents first. For a
+    cam under its drive the first orbit is sought at :data:`AUTONOMOUS_AMPLITUDE`."""
     if int(levels) != levels or levels < 0:
         raise ParameterError(f"the number of doublings to follow must be a whole number >= 0, got {levels}")
     found, parents = [], [branch]
@@ -79,8 +88,9 @@ def switch_doublings(problem: Problem, branch: Branch, stop: float, levels: int 
                 if item.kind != "period-doubling":
                     continue
                 try:
-                    children.append(switch_branch(problem, item, stop, step=step, max_step=max(step, 0.1),
-                                                  max_points=max_points, progress=progress))
+                    amplitude = 1e-3 if problem.clock is None else AUTONOMOUS_AMPLITUDE
+                    children.append(switch_branch(problem, item, stop, amplitude, step=step,
+                                                  max_step=max(step, 0.1), max_points=max_points, progress=progress))
                 except CamdynError:
                     continue
         found.extend(children)

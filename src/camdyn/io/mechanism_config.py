@@ -139,24 +139,26 @@ def simulate_mechanism(mechanism: Mechanism, revolutions: float = 5.0, sample_ra
 
 def mechanism_rig(mechanism: Mechanism):
     """The mechanism as the rig its Python entry takes: a
+    :class:`~camdyn.simulation.mechanisms.DrivenCamRig`, a
     :class:`~camdyn.simulation.flexible_pivot.FlexiblePivotRig` or a
     :class:`~camdyn.simulation.two_followers.TwoFollowerRig` (its ``drive.initial_speed``,
-    if given, becomes the systems' ``motion.speed``); the driven cam is refused, having no
-    rig of fixed period (:func:`camdyn.continuation.mechanisms.mechanism_problem`)."""
+    if given, becomes the systems' ``motion.speed``), for
+    :func:`camdyn.continuation.mechanisms.mechanism_problem`."""
     spec = mechanism.spec
     if spec.kind == "flexible-pivot":
         from camdyn.simulation.flexible_pivot import FlexiblePivotRig
         return FlexiblePivotRig(mechanism.system, spec.pivot_stiffness, mechanism.pivot_damping)
-    if spec.kind == "two-followers":
-        from camdyn.simulation.two_followers import TwoFollowerRig
-        system, second = mechanism.system, mechanism.second
-        if spec.initial_speed is not None:
-            motion = {"motion.speed": abs(spec.initial_speed) / (2.0 * math.pi),
-                      "motion.direction": 1 if spec.initial_speed >= 0.0 else -1}
-            system, second = system.with_values(**motion), second.with_values(**motion)
-        return TwoFollowerRig(system, second, spec.placement, mechanism.drive)
-    raise ParameterError("the driven cam has no fixed period: its speed is a state that settles where the drive and "
-                         "the load balance, so periodic orbits and continuation are not available for it")
+    system, second = mechanism.system, mechanism.second
+    if spec.initial_speed is not None:
+        motion = {"motion.speed": abs(spec.initial_speed) / (2.0 * math.pi),
+                  "motion.direction": 1 if spec.initial_speed >= 0.0 else -1}
+        system = system.with_values(**motion)
+        second = None if second is None else second.with_values(**motion)
+    if spec.kind == "driven-cam":
+        from camdyn.simulation.mechanisms import DrivenCamRig
+        return DrivenCamRig(system, mechanism.drive)
+    from camdyn.simulation.two_followers import TwoFollowerRig
+    return TwoFollowerRig(system, second, spec.placement, mechanism.drive)
 
 
 def _quoted(value: float, unit: str) -> str:

@@ -19,8 +19,8 @@ from camdyn.integrator import driver
 from camdyn.params.system import System
 
 __all__ = ["LargeResultWarning", "check_number", "check_system", "check_tolerances", "check_sampling",
-           "result_bytes", "available_memory",
-           "check_memory", "RTOL_RANGE", "ATOL_RANGE", "MIN_SAMPLES_PER_PERIOD", "WARN_BYTES"]
+           "result_bytes", "available_memory", "check_memory", "event_room", "with_room_for_events",
+           "RTOL_RANGE", "ATOL_RANGE", "MIN_SAMPLES_PER_PERIOD", "WARN_BYTES"]
 
 #: Sensible relative tolerances [-]: tighter than 1e-14 is below double precision's
 #: resolution of the state; looser than 1e-2 no longer resolves the contact.
@@ -143,6 +143,13 @@ def check_run(counters, what: str) -> None:
         raise KeyboardInterrupt
     if status != driver.STATUS_OK:
         raise SimulationError(f"{what} {driver.STATUS_MESSAGES[status]}")
+
+
+def event_room(duration: float, period: float) -> int:
+    """The events a run's log first has room for: 64 + 16 per cam period ``period`` [s]
+    over ``duration`` [s] (a hundred periods' worth where the period is infinite);
+    :func:`with_room_for_events` makes room for more where a run counts more."""
+    return int(64 + 16 * (duration / period if math.isfinite(period) else 100))
 
 
 def with_room_for_events(run, max_events: int):

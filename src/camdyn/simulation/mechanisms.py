@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time as _time
+import typing
 
 import numpy as np
 import xarray as xr
@@ -21,8 +22,8 @@ from camdyn.simulation import limits
 from camdyn.simulation.runner import METHODS, default_max_step, prepare
 from camdyn.systems import registry as systems
 
-__all__ = ["CamDrive", "simulate_driven_cam", "simulate_stick_slip", "speed_fluctuation", "tabulated_motion",
-           "simulate_tabulated", "run_mechanism"]
+__all__ = ["CamDrive", "DrivenCamRig", "simulate_driven_cam", "simulate_stick_slip", "speed_fluctuation",
+           "tabulated_motion", "simulate_tabulated", "run_mechanism"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -100,6 +101,15 @@ class CamDrive:
                          self.bearing_viscous, self.bearing_coulomb, self.bearing_speed])
 
 
+class DrivenCamRig(typing.NamedTuple):
+    """The driven cam: the arguments of :func:`simulate_driven_cam`, ``system`` (the
+    cam-follower; its constant motion gives the starting cam angle and speed) and
+    ``drive`` (:class:`CamDrive`)."""
+
+    system: System
+    drive: CamDrive
+
+
 #: The driven cam's state: name, unit, long name, in the state's order.
 DRIVEN_STATE = (
     ("alpha", "rad", "follower angle (clockwise)"),
@@ -141,7 +151,7 @@ def _run_counters(system_id, p, y0, duration, sample_rate, period, rtol, atol, m
     t_out = np.minimum(np.arange(n_out) / sample_rate, duration)
     if max_step is None:
         max_step = default_max_step(period, duration)
-    max_events = int(64 + 16 * (duration / period if math.isfinite(period) else 100))
+    max_events = limits.event_room(duration, period)
     start = _time.perf_counter()
     y, modes, events, counters = limits.with_room_for_events(
         lambda room: driver.integrate(system_id, p.copy(), y0, 0.0, float(duration), t_out, float(rtol), float(atol),

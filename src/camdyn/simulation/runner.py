@@ -229,7 +229,7 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
     t_out = np.minimum(np.arange(n_out) / sample_rate, duration)  # the last sample may round past the end
     if max_step is None:
         max_step = default_max_step(period, duration)
-    max_events = int(64 + 16 * (duration / period if math.isfinite(period) else 100))
+    max_events = limits.event_room(duration, period)
     start = _time.perf_counter()
     y, modes, events, counters = limits.with_room_for_events(
         lambda room: driver.integrate(systems.CAM_FOLLOWER, prep.p.copy(), y0, 0.0, float(duration), t_out, float(rtol),

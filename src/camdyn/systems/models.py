@@ -35,7 +35,9 @@ bearing (:mod:`camdyn.model.flexible_pivot`, 8 states, the same guards and modes
 system 9 two rocking followers on one driven cam (:mod:`camdyn.model.two_followers`,
 11 states, per follower the cam-follower's guards and mode with a stick phase); system 10
 the translating follower with friction at its cam contact
-(:mod:`camdyn.model.sliding_follower`, 4 states, 5 guards).
+(:mod:`camdyn.model.sliding_follower`, 4 states, 5 guards); systems 11 and 12 the driven
+cam and two followers with the cam angle as the independent variable
+(:mod:`camdyn.model.cam_angle`), for their periodic orbits.
 
 A new model gets an id here (or, for a mechanism, in :mod:`camdyn.systems.mechanisms`)
 and a branch in each function; these two modules are the only ones that import the
@@ -65,6 +67,8 @@ DRIVEN_CAM = mechanisms.DRIVEN_CAM
 FLEXIBLE_PIVOT = mechanisms.FLEXIBLE_PIVOT
 TWO_FOLLOWERS = mechanisms.TWO_FOLLOWERS
 SLIDING_FOLLOWER = mechanisms.SLIDING_FOLLOWER
+DRIVEN_CAM_ANGLE = mechanisms.DRIVEN_CAM_ANGLE
+TWO_FOLLOWERS_ANGLE = mechanisms.TWO_FOLLOWERS_ANGLE
 
 
 @numba.njit(cache=True)
@@ -139,7 +143,7 @@ def carried_slot(system, p):
     The variational system carries that value's derivatives
     (:mod:`camdyn.systems.variational`). Two followers on one cam keep one such slot per
     follower and are not covered (-1)."""
-    if system == CAM_FOLLOWER or system == DRIVEN_CAM or system == FLEXIBLE_PIVOT:
+    if system == CAM_FOLLOWER or system == DRIVEN_CAM or system == FLEXIBLE_PIVOT or system == DRIVEN_CAM_ANGLE:
         return L.MODE_APPROACH if p[L.DAMPING_LAW] >= contact.FIRST_RESTITUTION_CODE else -1
     if system == TRANSLATING_FOLLOWER:
         return 1 if p[translating.DAMPING_LAW] >= contact.FIRST_RESTITUTION_CODE else -1
@@ -150,7 +154,8 @@ def carried_slot(system, p):
 def carries(system):
     """Whether the mode of ``system`` can hold a value carried from an event
     (:func:`carried_slot` for some parameters)."""
-    return system == CAM_FOLLOWER or system == DRIVEN_CAM or system == FLEXIBLE_PIVOT or system == TRANSLATING_FOLLOWER
+    return (system == CAM_FOLLOWER or system == DRIVEN_CAM or system == FLEXIBLE_PIVOT or system == TRANSLATING_FOLLOWER
+            or system == DRIVEN_CAM_ANGLE)
 
 
 # --- forced linear oscillator: y'' + 2 zeta w y' + w^2 y = A cos(W t); p = (w, zeta, A, W, stiff)

@@ -21,6 +21,7 @@ from camdyn.systems.models import (
     CAM_FOLLOWER,
     COUPLED_OSCILLATORS,
     DRIVEN_CAM,
+    DRIVEN_CAM_ANGLE,
     FLEXIBLE_PIVOT,
     OSCILLATOR,
     RIGID_IMPACT,
@@ -28,11 +29,13 @@ from camdyn.systems.models import (
     STICK_SLIP,
     TRANSLATING_FOLLOWER,
     TWO_FOLLOWERS,
+    TWO_FOLLOWERS_ANGLE,
 )
 from camdyn.systems.variational import PARAMETRIC, VARIATIONAL
 
 __all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", "TRANSLATING_FOLLOWER", "STICK_SLIP",
-           "DRIVEN_CAM", "FLEXIBLE_PIVOT", "TWO_FOLLOWERS", "SLIDING_FOLLOWER",
+           "DRIVEN_CAM", "FLEXIBLE_PIVOT", "TWO_FOLLOWERS", "SLIDING_FOLLOWER", "DRIVEN_CAM_ANGLE",
+           "TWO_FOLLOWERS_ANGLE",
            "VARIATIONAL", "PARAMETRIC", "state_size", "controlled_size",
            "guard_count", "mode_size", "rhs", "rhs_inline", "jacobian", "guards",
            "guard_samples", "expected_sign", "transition", "initial_mode", "regime", "preferred_method",
