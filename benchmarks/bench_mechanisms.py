@@ -32,12 +32,14 @@ check in the temporary directory)
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import tempfile
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 from bench_flexible_pivot import cost_at
 from bench_peers import machine, versions
@@ -56,16 +58,33 @@ RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
 QUICK_RTOLS = (1e-6, 1e-8, 1e-10)
 REFERENCE = (1e-12, 1e-15)  # rtol [-], atol [rad, rad/s]
 TARGETS = (1e-6, 1e-8)      # relative error in alpha [-]
-MOTOR = {"drive.kind": "motor", "drive.stall_torque": "1 N*m", "drive.free_speed": "13.86 Hz"}
-#: name -> (example file, overrides)
+#: the motor of driven_cam.toml: stall torque [N m], free speed [rad/s] (13.86 Hz)
+MOTOR = {"kind": "motor", "stall_torque": 1.0, "free_speed": 2.0 * math.pi * 13.86}
+#: name -> (example file, changes to its drive)
 CASES = {
     "driven cam, motor": ("driven_cam.toml", {}),
-    "driven cam, prescribed": ("driven_cam.toml", {"drive.kind": "prescribed"}),
+    "driven cam, prescribed": ("driven_cam.toml", {"kind": "prescribed", "stall_torque": 0.0,
+                                                   "free_speed": math.inf}),
     "two followers, prescribed": ("two_followers_prescribed.toml", {}),
     "two followers, motor": ("two_followers_prescribed.toml", MOTOR),
 }
 #: the cam angle's and cam speed's state slots of each model
 SHAFT = {systems.DRIVEN_CAM: (2, 3), systems.TWO_FOLLOWERS: (4, 5)}
+
+
+@numba.njit
+def _rhs_calls(system, p, states, modes, times, calls):
+    """``calls`` calls of the model's compiled right-hand side, cycling over the states; a checksum."""
+    f = np.empty(states.shape[1])
+    y = states[0].copy()
+    total = 0.0
+    for i in range(calls):
+        k = i % states.shape[0]
+        for j in range(states.shape[1]):
+            y[j] = states[k, j]
+        systems.rhs(system, times[k], y, modes[k], p, f)
+        total += f[1]
+    return total
 
 
 class Model:
@@ -78,7 +97,9 @@ class Model:
         self.duration = periods * period
         self.t = np.arange(int(self.duration * SAMPLE_RATE) + 1) / SAMPLE_RATE
         self.room = 1000 + 200 * periods
-        y, counters = self.core(*REFERENCE)
+        y, modes, counters = self.core(*REFERENCE)
+        every = max(1, self.t.size // 500)
+        self.samples = (y[::every].copy(), modes[::every].copy(), self.t[::every].copy())
         cam, speed = SHAFT.get(system_id, (None, None))
         #: revolutions the cam turned [-]
         self.revolutions = periods if cam is None else float(y[-1, cam] - y[0, cam]) / (2.0 * math.pi)
@@ -94,20 +115,44 @@ class Model:
             # coefficient of speed fluctuation (Norton, Design of Machinery, 2012, eq 11.18)
             self.diagnostics["speed_fluctuation"] = float(np.ptp(late) / abs(np.mean(late)))
 
-    def core(self, rtol, atol):
-        """camdyn's compiled core, DOP853; returns the states and the counters."""
-        y, _, _, counters = driver.integrate(self.system_id, self.p.copy(), self.y0.copy(), 0.0, self.duration,
-                                             self.t, float(rtol), float(atol), self.period / 32,
-                                             driver.METHOD_DOP853, 50_000_000, self.room, True)
+    def core(self, rtol, atol, t=None):
+        """camdyn's compiled core, DOP853, sampled at ``t`` [s] (default the sample times);
+        returns the states, the modes and the counters."""
+        t = self.t if t is None else t
+        y, modes, _, counters = driver.integrate(self.system_id, self.p.copy(), self.y0.copy(), 0.0, self.duration,
+                                                 t, float(rtol), float(atol), self.period / 32,
+                                                 driver.METHOD_DOP853, 50_000_000, self.room, True)
         if counters[driver.COUNT_STATUS] != driver.STATUS_OK:
             raise RuntimeError(driver.STATUS_MESSAGES[int(counters[driver.COUNT_STATUS])])
         names = {"accepted_steps": driver.COUNT_ACCEPTED, "rejected_steps": driver.COUNT_REJECTED,
                  "rhs_calls": driver.COUNT_RHS, "events": driver.COUNT_EVENTS}
-        return y, {name: int(counters[i]) for name, i in names.items()}
+        return y, modes, {name: int(counters[i]) for name, i in names.items()}
+
+    def rhs_cost(self, calls=200_000, rounds=5):
+        """CPU time of one right-hand-side call [ns] at the reference run's samples, best of rounds."""
+        states, modes, times = self.samples
+        _rhs_calls(self.system_id, self.p, states, modes, times, 10)
+        best = math.inf
+        for _ in range(rounds):
+            start = time.process_time()
+            _rhs_calls(self.system_id, self.p, states, modes, times, calls)
+            best = min(best, (time.process_time() - start) / calls * 1e9)
+        return best
+
+    def sparse_output_cost(self, rtol=1e-8, rounds=3):
+        """CPU time per revolution [ms] at ``rtol`` sampled once per period instead of at
+        the sample rate (what the output's interpolation costs), best of rounds."""
+        t = np.arange(0.0, self.duration, self.period)
+        best = math.inf
+        for _ in range(rounds):
+            start = time.process_time()
+            self.core(rtol, 1e-3 * rtol, t)
+            best = min(best, time.process_time() - start)
+        return 1e3 * best / self.revolutions
 
     def run(self, rtol):
         """A rung: ``atol = 1e-3 rtol``; follower 1's angle [rad] and the counters."""
-        y, counters = self.core(rtol, 1e-3 * rtol)
+        y, _, counters = self.core(rtol, 1e-3 * rtol)
         return y[:, 0], counters
 
     def error(self, alpha):
@@ -118,9 +163,9 @@ class Model:
 
 def mechanism_models(case, periods):
     """The mechanism of ``case`` and its single follower at the mechanism's mean speed."""
-    source, overrides = CASES[case]
-    mechanism = load_mechanism(EXAMPLES / source, overrides)
-    system, drive = mechanism.system, mechanism.drive
+    source, changes = CASES[case]
+    mechanism = load_mechanism(EXAMPLES / source)
+    system, drive = mechanism.system, dataclasses.replace(mechanism.drive, **changes)
     speed = system.motion.angular_speed  # [rad/s]
     if mechanism.spec.kind == "driven-cam":
         prep = prepare(system)
@@ -212,7 +257,8 @@ def main():
         print(case, flush=True)
         models = mechanism_models(case, periods)
         curves = measure(models, rtols, rounds)
-        entry = {role: {**m.diagnostics, "rungs": rows}
+        entry = {role: {**m.diagnostics, "rhs_ns_per_call": m.rhs_cost(),
+                        "cpu_ms_per_rev_at_1e-8_sampled_once_per_period": m.sparse_output_cost(), "rungs": rows}
                  for role, m, rows in zip(("single", "mechanism"), models, curves)}
         results["cases"][case] = entry
         results["summary"] += summarize(case, entry["single"], entry["mechanism"])
