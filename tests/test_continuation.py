@@ -13,8 +13,9 @@ import pytest
 from scipy.linalg import expm
 from scipy.optimize import brentq, fsolve, minimize_scalar
 
-from camdyn.continuation import find_orbit, model_problem
-from camdyn.continuation.branches import continue_orbits
+from camdyn.continuation import branches, find_orbit, model_problem
+from camdyn.continuation.branches import _Continuation, continuation_scales, continue_orbits
+from camdyn.continuation.orbits import flow
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.systems import registry as systems
 
@@ -386,3 +387,46 @@ def test_rigid_impact_branch_turns_round_the_fold_of_the_closed_form():
         expected_state = _free(orbit.parameter, t_impact, sigma, v, orbit.period - t_impact)
         np.testing.assert_allclose(orbit.state, expected_state, rtol=0, atol=1e-8)
         assert orbit.impacts_per_period == 1 and np.max(np.abs(orbit.multipliers)) > 1.0
+
+
+def _oscillator_point():
+    """The forced linear oscillator's orbit as a continuation point, and its job."""
+    problem = model_problem(systems.OSCILLATOR, [2.0, 0.05, 0.7, 1.3, 0.0], [0.0, 0.0, 0.0])
+    orbit = find_orbit(problem, start=[0.0, 0.0])
+    scales = continuation_scales(orbit)
+    job = _Continuation(problem, 1, scales, 1e-10, 15)
+    return job, job.point(job.pack(orbit) / scales, np.r_[0.0, 0.0, 1.0], 0)
+
+
+def test_corrector_tries_another_points_jacobian_before_newtons_iterations(monkeypatch):
+    job, point = _oscillator_point()
+    wrong = point.jacobian.copy()
+    wrong[:, :-1] *= -3.0                 # chord steps with it grow by 4/3 per iteration
+    guess, arclength = point.z + 0.01 * point.tangent, 0.01
+    with pytest.raises(SimulationError):
+        job._iterate(guess, point.tangent, point.z, arclength, wrong)
+    runs = []
+    monkeypatch.setattr(branches, "flow", lambda *args, **kw: runs.append(args) or flow(*args, **kw))
+    found = job.correct(guess, point.tangent, point.z, arclength, wrong, (point.jacobian,))
+    assert len(runs) == 1                 # the new point's own variational run: no Newton iteration
+    runs.clear()
+    newton = job.correct(guess, point.tangent, point.z, arclength, wrong)
+    assert len(runs) > 1                  # Newton's renewed Jacobians, then the point's run
+    np.testing.assert_allclose(found.z, newton.z, rtol=0, atol=1e-9)
+    # the orbit at the corrected parameter, solved on its own
+    x, value = job.unscale(found.z)
+    alone = find_orbit(job.problem, start=x, value=value)
+    np.testing.assert_allclose(x, alone.state, rtol=0, atol=1e-9)
+
+
+def test_guard_samples_are_the_guards_at_each_sample():
+    problem = model_problem(systems.RIGID_IMPACT, [1.0, 0.05, 1.0, 2.0, 0.0, 0.8], [-1.0, 0.0, 0.0])
+    p, _ = problem.build(problem.value)
+    times = np.linspace(0.0, 3.0, 7)
+    states = np.column_stack([np.sin(times), np.cos(times), times])
+    out = np.empty(times.size)
+    systems.guard_samples(problem.system_id, p, times, states, 0, out)
+    values, rates = np.empty(systems.guard_count(problem.system_id)), np.empty(systems.guard_count(problem.system_id))
+    for t, y, got in zip(times, states, out):
+        systems.guards(problem.system_id, t, y, y, False, p, values, rates)
+        assert got == values[0]

@@ -242,16 +242,19 @@ class _Continuation:
         return vector if determinant * self.orientation > 0 else -vector
 
     def correct(self, guess: np.ndarray, direction: np.ndarray, anchor: np.ndarray, arclength: float,
-                jac: np.ndarray) -> _Point:
+                jac: np.ndarray, others: tuple = ()) -> _Point:
         """Corrector on ``G = 0`` and ``direction . (z - anchor) = arclength``: chord
         iterations with the Jacobian ``jac`` of the last point (Allgower & Georg 2003,
         sec. 6.1), then, if they fail (the Jacobian jumps where the orbit gains or loses
-        an event), Newton's iterations with the Jacobian renewed at each; raises
-        :class:`SimulationError` when neither converges."""
-        try:
-            return self._iterate(guess, direction, anchor, arclength, jac)
-        except (SimulationError, ParameterError):
-            return self._iterate(guess, direction, anchor, arclength, None)
+        an event), chord iterations with each Jacobian of ``others`` in turn (another
+        point's: a location's bracket end across the jump), then Newton's iterations with
+        the Jacobian renewed at each; raises :class:`SimulationError` when none converges."""
+        for matrix in (jac, *others):
+            try:
+                return self._iterate(guess, direction, anchor, arclength, matrix)
+            except (SimulationError, ParameterError):
+                pass
+        return self._iterate(guess, direction, anchor, arclength, None)
 
     def _iterate(self, guess, direction, anchor, arclength, jac) -> _Point:
         """Chord iterations with ``jac``, or Newton's with a renewed Jacobian if None."""
@@ -314,7 +317,8 @@ def _locate(job: _Continuation, a: _Point, b: _Point, kind: str, max_iterations:
         else:
             s = hi[0] - f_hi * (hi[0] - lo[0]) / (f_hi - f_lo)
         try:
-            point = job.correct(a.z + s * a.tangent, a.tangent, a.z, s, a.jacobian)
+            point = job.correct(a.z + s * a.tangent, a.tangent, a.z, s, a.jacobian,
+                                (hi[1].jacobian,) if kind == "grazing" else ())
         except (SimulationError, ParameterError):
             break                                 # the corrector fails here: keep the bracket's best point
         f = value(point)

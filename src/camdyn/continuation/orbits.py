@@ -215,12 +215,8 @@ def _variational(problem: Problem, p, period, x, value, t0, t1, samples, max_ste
 def _guard_minimum(system_id: int, p: np.ndarray, times: np.ndarray, states: np.ndarray) -> float:
     """Smallest value of guard 0 over the sampled states, refined by the parabola through
     the smallest sample and its neighbours (error of order the sample spacing cubed)."""
-    m = systems.guard_count(system_id)
-    values, rates = np.empty(m), np.empty(m)
     sampled = np.empty(times.size)
-    for i, (t, y) in enumerate(zip(times, states)):
-        systems.guards(system_id, float(t), y, y, False, p, values, rates)
-        sampled[i] = values[0]
+    systems.guard_samples(system_id, p, times, np.ascontiguousarray(states), 0, sampled)
     i = int(np.argmin(sampled))
     if 0 < i < sampled.size - 1:
         left, middle, right = sampled[i - 1], sampled[i], sampled[i + 1]

@@ -209,19 +209,26 @@ def _differenced_jacobian(t, y, mode, p, jac, central):
     ad = y[1]
     eps_a = 1e-6 if central else 1e-8
     eps_v = 1e-6 * max(abs(ad), 1.0) if central else 1.5e-8 * max(abs(ad), 1e-3)
-    res0 = evaluate_shifted(t, alpha, ad, mode, p, 0.0)
     contact = mode[L.MODE_CONTACT] > 0.5
-    chi = res0[4] if contact else 0.0
+    theta, theta_dot = cam_angle(t, p)
+    # the moment arm from the kinematics alone: the central differences need no force at
+    # y itself (the forward ones evaluate it below)
+    delta, delta_dot, chi, rho_c, vr, n_v, u_v = contact_kinematics(alpha, ad, theta, theta_dot, p)
+    if not contact:
+        chi = 0.0
     # alpha moved with delta held (delta moves by -chi d alpha): forward, or central
     res_a = evaluate_shifted(t, alpha + eps_a, ad, mode, p, chi * eps_a)
-    res_b = evaluate_shifted(t, alpha - eps_a, ad, mode, p, -chi * eps_a) if central else res0
+    if central:
+        res_b = evaluate_shifted(t, alpha - eps_a, ad, mode, p, -chi * eps_a)
+        res_w = evaluate_shifted(t, alpha, ad - eps_v, mode, p, 0.0)
+    else:                                       # the forces at y itself
+        res_b = evaluate_shifted(t, alpha, ad, mode, p, 0.0)
+        res_w = res_b
     span_a = 2.0 * eps_a if central else eps_a
     j10 = (res_a[0] - res_b[0]) / span_a
     j20 = (res_a[10] - res_b[10]) / span_a if contact else 0.0
     if contact:
         # d Fn / d delta by a central relative difference of the contact law
-        theta, theta_dot = cam_angle(t, p)
-        delta, delta_dot, chi, rho_c, vr, n_v, u_v = contact_kinematics(alpha, ad, theta, theta_dot, p)
         d = 1e-6 * max(abs(delta), 1e-12)
         fp = contact_force(delta + d, delta_dot, rho_c, mode[L.MODE_APPROACH], p)[0]
         fm = contact_force(delta - d, delta_dot, rho_c, mode[L.MODE_APPROACH], p)[0]
@@ -230,7 +237,6 @@ def _differenced_jacobian(t, y, mode, p, jac, central):
         j10 -= chi * dfn * (chi + mu * p[L.OFFSET]) / p[L.INERTIA]
         j20 -= chi * dfn * (-n_v + mu * u_v)
     res_v = evaluate_shifted(t, alpha, ad + eps_v, mode, p, 0.0)
-    res_w = evaluate_shifted(t, alpha, ad - eps_v, mode, p, 0.0) if central else res0
     span_v = 2.0 * eps_v if central else eps_v
     jac[1, 0] = j10
     jac[1, 1] = (res_v[0] - res_w[0]) / span_v

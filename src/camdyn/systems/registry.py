@@ -14,6 +14,7 @@ driver sizes its arrays from :func:`state_size`, :func:`guard_count` and
 from __future__ import annotations
 
 import numba
+import numpy as np
 
 from camdyn.systems import models, variational
 from camdyn.systems.models import (
@@ -37,7 +38,7 @@ __all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", 
            "TWO_FOLLOWERS_ANGLE",
            "VARIATIONAL", "PARAMETRIC", "state_size", "controlled_size",
            "guard_count", "mode_size", "rhs", "rhs_inline", "jacobian", "guards",
-           "expected_sign", "transition", "initial_mode", "regime", "preferred_method",
+           "guard_samples", "expected_sign", "transition", "initial_mode", "regime", "preferred_method",
            "plain_error_estimate", "monitor"]
 
 
@@ -120,6 +121,18 @@ def guards(system, t, y, f, known, p, values, rates):
         models.guards(model, t, y[:n], f[:n], known, p, values, rates)
     else:
         models.guards(system, t, y, f, known, p, values, rates)
+
+
+@numba.njit(cache=True)
+def guard_samples(system, p, times, states, index, out):
+    """Guard ``index``'s value at each sampled state ``states[i]`` at ``times[i]`` [s]
+    into ``out[i]`` (its unit), as :func:`guards` gives it with the rates unknown."""
+    m = guard_count(system)
+    values = np.empty(m)
+    rates = np.empty(m)
+    for i in range(times.shape[0]):
+        guards(system, times[i], states[i], states[i], False, p, values, rates)
+        out[i] = values[index]
 
 
 @numba.njit(cache=True)
