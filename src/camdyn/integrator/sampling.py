@@ -8,7 +8,7 @@ import numba
 from camdyn.integrator.steppers import KIND_DOP853, dense, dop853_dense
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def sample(t, h, t_stop, i_out, t_out, y0, f0, y1, f1, work, kind, mode, scratch, y_out, mode_out):
     """Fill the output times in (t, t_stop] of the current step; return the next index."""
     n_out = t_out.shape[0]

@@ -264,7 +264,7 @@ def _dop853_stage(system, t, y, h, s, mode, p, k, yt):
     systems.rhs_inline(system, t + D8_C[s] * h, yt, mode, p, k[s])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def dop853_step(system, t, y, f0, h, mode, p, k, yt, y1, f1, err5, err3, controlled):
     """Explicit DOP853 step: 12 stages plus f(t + h, y1) into ``k[12]`` (``k`` is 16 x n).
 
@@ -299,7 +299,7 @@ def dop853_step(system, t, y, f0, h, mode, p, k, yt, y1, f1, err5, err3, control
     return D8_STAGES
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def dop853_error_norm(y0, y1, err5, err3, h, rtol, atol, controlled, plain):
     """Scaled error norm of a DOP853 step over the first ``controlled`` components:
     Hairer's combination ``h err5^2 / sqrt(err5^2 + 0.01 err3^2)`` of the 5th- and
@@ -321,7 +321,7 @@ def dop853_error_norm(y0, y1, err5, err3, h, rtol, atol, controlled, plain):
     return abs(h) * e5 / denominator
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def dop853_extend(system, t, y, h, y1, f1, mode, p, k, yt, out):
     """Three extra stages and the 7 coefficient rows of DOP853's continuous extension
     into ``out`` (7 x n). Returns the number of right-hand-side calls."""
