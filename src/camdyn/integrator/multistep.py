@@ -305,7 +305,7 @@ def _switch(hist, family, q, h, ratio):
     hist[NEXT_STEP, 0] = h * (min(ratio, SWITCH_GROWTH) if ratio >= THRESHOLD else 1.0)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def multistep_step(system, t, y, f, h, mode, p, hist, y1, f1, work, matrix, pivots, rtol, atol, switching):
     """One step of ``h`` [s] from ``(t, y)`` (``f`` its rates) into ``y1`` and ``f1``
     (the rates of the step's polynomial at its end, ``z_new[1] / h``), by the history's

@@ -360,7 +360,7 @@ def finish_step(hist, family, q, h, y1, f1, work, rtol, atol, controlled):
     return e_norm
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def adams_accept(hist, t_end_of_step, h):
     """Make the accepted step's history current, in the family chosen for the next step
     (a switch keeps the order, at most :data:`BDF_MAX_ORDER` for BDF, and waits
@@ -391,7 +391,7 @@ def adams_accept(hist, t_end_of_step, h):
     return hist[NEXT_STEP, 0]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def nordsieck_dense(tau, hist, n, out):
     """State at the fraction ``tau`` of the last step, from its Nordsieck polynomial."""
     q = int(hist[ORDER, 0])
@@ -453,7 +453,7 @@ def adams_start(hist, coefficients, y1, t1, h, rtol, atol, controlled, work):
     return h * min(eta, 1.0)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def adams_ready(hist, t, y):
     """Whether the history is at ``(t, y)`` (else the next step starts it again)."""
     ready = hist[TIME, 0] == t

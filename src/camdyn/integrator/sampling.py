@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numba
 
-from camdyn.integrator.steppers import KIND_DOP853, dense, dop853_dense
+from camdyn.integrator.nordsieck import nordsieck_dense
+from camdyn.integrator.steppers import KIND_DOP853, KIND_NORDSIECK, dense, dop853_dense
 
 
 @numba.njit(cache=True, inline="always")
@@ -15,6 +16,8 @@ def sample(t, h, t_stop, i_out, t_out, y0, f0, y1, f1, work, kind, mode, scratch
     while i_out < n_out and t_out[i_out] <= t_stop:
         if kind == KIND_DOP853:
             dop853_dense((t_out[i_out] - t) / h, y0, work, scratch)
+        elif kind == KIND_NORDSIECK:
+            nordsieck_dense((t_out[i_out] - t) / h, work, y0.shape[0], scratch)
         else:
             dense((t_out[i_out] - t) / h, h, y0, f0, y1, f1, work, kind, scratch)
         for i in range(y0.shape[0]):
