@@ -168,7 +168,7 @@ def model_spectrum(system_id: int, p, y0, period: float, periods: int = 400, tra
     rtol, atol : float
         Local error tolerances of the state and the matrix [-], [units of the state].
     max_step : float, optional
-        Largest step [s]; default T / 12 (guards checked every T / 32).
+        Largest step [s]; default that of :func:`~camdyn.simulation.limits.step_limits`.
     progress : callable, optional
         ``progress(done, total)`` after each period [-].
 
@@ -180,7 +180,7 @@ def model_spectrum(system_id: int, p, y0, period: float, periods: int = 400, tra
     periods = _count("periods", periods, 1)
     transient = _count("transient", transient, 0)
     t_start = limits.check_number("t_start", t_start, "s")
-    h_max, scan = limits.step_limits(period)
+    h_max, scan = limits.step_limits(period, system_id)
     h_max = h_max if max_step is None else limits.check_number("max_step", max_step, "s")
     if not (math.isfinite(h_max) and h_max > 0):
         raise ParameterError(f"max_step must be a positive number of seconds, got {max_step!r}")
