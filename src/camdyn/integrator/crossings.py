@@ -5,13 +5,15 @@ the guard's own cubic Hermite polynomial (from its exact rates at both ends), or
 midpoint for a guard whose rate is unknown; the earliest sign change against the
 expected sign is located by the Illinois method on the step's continuous extension.
 
-The cubic is only accurate on a short interval: a step longer than the scan interval
-the caller gives (``scan`` [s]) is split into equal sub-intervals no longer than it, the
-guards and their rates are evaluated at the interior ends on the step's continuous
-extension (the state's rate from the extension's derivative after a DOP853 step, from
-the right-hand side after the others), and each sub-interval is checked as a short step
-would be (:func:`scan_crossing`). A step no longer than ``scan`` is checked as a whole,
-with the very arithmetic of before.
+The cubic is only accurate on a short interval (its error grows as the interval's fourth
+power): a step longer than the scan interval the caller gives (``scan`` [s]) is scanned
+on its continuous extension (:func:`scan_crossing`). The guards and their rates are
+evaluated at its midpoint (the state's rate from the extension's derivative after a
+DOP853 step, from the right-hand side after the others); where every active guard stays
+clear of zero on both half-step cubics by more than the whole-step cubic's error there
+(:func:`clear_margin`), the step holds no crossing; else it is split into an even number
+of equal sub-intervals no longer than ``scan``, each checked as a short step would be. A
+step no longer than ``scan`` is checked as a whole, with the very arithmetic of before.
 
 The functions marked ``inline="always"`` are compiled into the driver's loop (numba IR
 inlining), so that they add no call per step.
