@@ -23,8 +23,8 @@ the penetration and Coulomb friction on the sign of the sliding velocity, and th
 solvers step through the switches. Tolerances: rtol from 1e-4 to 1e-11 in half decades;
 atol = rtol * 1e-3 times each state's scale (0.1 rad, 5 rad/s, the largest cam work
 [J]) where a tool takes one per state (SciPy, CyRK), rtol * 1e-4 (the angle's) where it
-takes one number (camdyn, numbalsoda). SciPy and CyRK get camdyn's largest step (1/32 of
-the cam period); numbalsoda has no such option.
+takes one number (camdyn, numbalsoda). SciPy and CyRK get camdyn's largest step (1/12 of
+the cam period, ``camdyn.simulation.limits.step_limits``); numbalsoda has no such option.
 
 Truth: camdyn.testing.oracle.reference_simulate (SciPy DOP853 with events, restarted at
 every switch), rtol 1e-13, atol 1e-15, cached in the temporary directory. Error: max
@@ -62,6 +62,7 @@ from scipy.integrate import solve_ivp
 
 import camdyn
 from camdyn.integrator import driver
+from camdyn.simulation.limits import step_limits
 from camdyn.simulation.runner import prepare
 from camdyn.systems import registry as systems
 from camdyn.testing.oracle import reference_simulate
@@ -135,7 +136,8 @@ def run_camdyn_core(case, rtol):
     """camdyn's compiled core alone (``driver.integrate``, method chosen by the system)."""
     y, _, _, counters = driver.integrate(
         systems.CAM_FOLLOWER, case.prep.p, case.prep.y0.copy(), 0.0, case.duration, case.t, rtol,
-        scalar_atol(rtol), case.period / 32, 0, 50_000_000, 64 + 16 * case.revolutions, True)
+        scalar_atol(rtol), step_limits(case.period)[0], 0, 50_000_000, 64 + 16 * case.revolutions, True,
+        step_limits(case.period)[1])
     if counters[driver.COUNT_STATUS] != driver.STATUS_OK:
         raise RuntimeError(driver.STATUS_MESSAGES[int(counters[driver.COUNT_STATUS])])
     return y[:, 0], {name: int(counters[i]) for i, name in enumerate(driver.COUNTER_NAMES[:3])}
@@ -145,7 +147,7 @@ def scipy_tool(method, rhs):
     """A runner of ``solve_ivp(method)`` with the right-hand side ``rhs(p)`` builds."""
     def run(case, rtol):
         sol = solve_ivp(rhs(case.p), (0.0, case.duration), case.y0, method=method, t_eval=case.t, rtol=rtol,
-                        atol=rtol * case.atol_vector, max_step=case.period / 32)
+                        atol=rtol * case.atol_vector, max_step=step_limits(case.period)[0])
         if sol.status != 0:
             raise RuntimeError(sol.message)
         return sol.y[0], {"rhs_calls": int(sol.nfev), "jacobians": int(sol.njev)}
@@ -170,7 +172,7 @@ def cyrk_tool(method):
 
     def run(case, rtol):
         sol = nbsolve2_ivp(cyrk_rhs.address, (0.0, case.duration), case.y0.copy(), method=method, t_eval=case.t,
-                           args=case.p, rtol=rtol, atols=rtol * case.atol_vector, max_step=case.period / 32)
+                           args=case.p, rtol=rtol, atols=rtol * case.atol_vector, max_step=step_limits(case.period)[0])
         try:
             if not sol.success:
                 raise RuntimeError(sol.message)

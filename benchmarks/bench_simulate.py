@@ -23,6 +23,7 @@ import numpy as np
 
 import camdyn
 from camdyn.integrator import driver
+from camdyn.simulation.limits import step_limits
 from camdyn.simulation.runner import METHODS, prepare
 from camdyn.systems import registry as systems
 from camdyn.testing.oracle import reference_simulate
@@ -56,13 +57,14 @@ def run_case(label, preset, overrides, speed, method, revolutions, quick):
     scale = np.max(np.abs(truth[0]))
     camdyn.simulate(system, revolutions=1)  # load the compiled code
     ladder = []
+    largest, scan = step_limits(1.0 / speed)   # [s]
     for rtol in CAMDYN_RTOLS:
         sec, ds = best_time(lambda: camdyn.simulate(system, revolutions=revolutions, sample_rate=fs, rtol=rtol,
                                                     atol=1e-12), 3)
         err = float(np.max(np.abs(ds.alpha.values - truth[0])) / scale)
         # the compiled integration alone, returning the state at the same samples as SciPy
         args = (systems.CAM_FOLLOWER, prep.p, prep.y0, 0.0, float(ds.time.values[-1]), ds.time.values, rtol, 1e-12,
-                (1.0 / speed) / 32.0, METHODS["auto"], 10 ** 9, 64 + 16 * revolutions)
+                largest, METHODS["auto"], 10 ** 9, 64 + 16 * revolutions, False, scan)
         core, _ = best_time(lambda: driver.integrate(*args), 5)
         ladder.append({"rtol": rtol, "seconds": sec, "core_seconds": core, "error": err,
                        "steps": ds.attrs["solver_accepted_steps"], "rejected": ds.attrs["solver_rejected_steps"],

@@ -17,6 +17,7 @@ from camdyn.analysis.chaos import lyapunov_exponent
 from camdyn.cli.app import main
 from camdyn.errors import ParameterError
 from camdyn.integrator import driver
+from camdyn.simulation import limits
 from camdyn.simulation.runner import prepare
 from camdyn.sweeps import compute_chunk, spec_from_dict
 from camdyn.systems import registry as systems
@@ -34,10 +35,11 @@ def _period_map(system):
     """y -> state one cam period later (starting at t), as lyapunov_exponent advances it."""
     prep = prepare(system)
     period = system.motion.period
+    largest, scan = limits.step_limits(period)   # [s], as lyapunov_exponent steps
 
     def advance(y, t):
         out, _, _, counters = driver.integrate(systems.CAM_FOLLOWER, prep.p, y, t, t + period, np.array([t + period]),
-                                               RTOL, ATOL, period / 32.0, driver.METHOD_AUTO, 10 ** 8, 16)
+                                               RTOL, ATOL, largest, driver.METHOD_AUTO, 10 ** 8, 16, False, scan)
         assert counters[driver.COUNT_STATUS] == driver.STATUS_OK
         return out[0].copy()
 

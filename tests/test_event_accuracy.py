@@ -97,6 +97,30 @@ def test_two_sign_changes_within_one_long_step(method):
     np.testing.assert_allclose(events[:, 0], [t1, t1 + math.pi], rtol=0, atol=1e-5)
 
 
+def test_a_dip_inside_a_long_step_is_found_by_the_scan():
+    # y = c + c (1 + eps) cos t dips 1e-6 c below zero for 2 acos(1 / (1 + eps)) = 2.8e-3 s
+    # around t = pi. DOP853 at rtol 1e-7 takes steps of about 0.3 s, over which the cubic
+    # through a step's ends misses the dip (its error, about c h^4 / 384 = 2e-5 c, lifts
+    # it over the dip): without a scan no event is logged. Scanned every 0.05 s (the
+    # cubic's error there 1.6e-8 c) both crossings are found, at the closed form's
+    # times: near a graze the crossing time is ill-conditioned, an error dy in y moving
+    # it by dy / y' with y' = c sqrt(2 eps) = 1.4e-3 c /s there, so that the run's error
+    # of about 2e-8 c at rtol 1e-7 allows 1.5e-5 s.
+    epsilon, rtol, c = 1e-6, 1e-7, 1.0
+    p = np.array([1.0, 0.0, c, 0.0, 0.0])
+    y0 = np.array([c * (2.0 + epsilon), 0.0, 0.0])
+    runs = {scan: driver.integrate(systems.OSCILLATOR, p, y0, 0.0, 4.0, np.array([0.0]), rtol, 1e-3 * rtol, 10.0,
+                                   driver.METHOD_DOP853, 10 ** 6, 100, False, scan) for scan in (math.inf, 0.05)}
+    plain, scanned = runs[math.inf], runs[0.05]
+    assert plain[3][driver.COUNT_ACCEPTED] < 4.0 / 0.25    # steps longer than 0.25 s on average
+    assert plain[2].shape[0] == 0, plain[2]
+    events = scanned[2]
+    assert events.shape[0] == 2, events
+    assert list(events[:, 2]) == [-1.0, 1.0]
+    half_gap = math.acos(1.0 / (1.0 + epsilon))
+    np.testing.assert_allclose(events[:, 0], [math.pi - half_gap, math.pi + half_gap], rtol=0, atol=1.5e-5)
+
+
 @pytest.mark.slow
 def test_chattering_sequence_matches_the_reference():
     # at 7.5 Hz the follower bounces four times per revolution; every impact of the

@@ -30,27 +30,28 @@ import numpy as np
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.integrator import driver
 from camdyn.params.system import System
+from camdyn.simulation.limits import SCAN_FRACTION, STEP_FRACTION
 from camdyn.systems import registry as systems
 
 __all__ = ["LyapunovResult", "lyapunov_exponent"]
 
 
 @numba.njit(cache=True)
-def _advance(p, y, t0, t1, rtol, atol, h_max):
+def _advance(p, y, t0, t1, rtol, atol, period):
     t_out = np.array([t1])
-    out, modes, events, counters = driver.integrate(systems.CAM_FOLLOWER, p, y, t0, t1, t_out, rtol, atol, h_max,
-                                                    driver.METHOD_AUTO, 10 ** 8, 16, True)
+    out, modes, events, counters = driver.integrate(systems.CAM_FOLLOWER, p, y, t0, t1, t_out, rtol, atol,
+                                                    period * STEP_FRACTION, driver.METHOD_AUTO, 10 ** 8, 16, True,
+                                                    period * SCAN_FRACTION)
     return out[0].copy(), counters[driver.COUNT_STATUS]
 
 
 @numba.njit(cache=True)
 def _benettin(p, y0, period, omega, transient, revolutions, d0, rtol, atol):
     """ln(d_k / d0) for each period k after the transient; status (0 ok)."""
-    h_max = period / 32.0
     y = y0.copy()
     t = 0.0
     for _ in range(transient):
-        y, status = _advance(p, y, t, t + period, rtol, atol, h_max)
+        y, status = _advance(p, y, t, t + period, rtol, atol, period)
         if status != 0:
             return np.empty(0), status
         t += period
@@ -59,10 +60,10 @@ def _benettin(p, y0, period, omega, transient, revolutions, d0, rtol, atol):
     z[1] += omega * d0 / math.sqrt(2.0)
     logs = np.empty(revolutions)
     for k in range(revolutions):
-        y, status = _advance(p, y, t, t + period, rtol, atol, h_max)
+        y, status = _advance(p, y, t, t + period, rtol, atol, period)
         if status != 0:
             return logs[:k], status
-        z, status = _advance(p, z, t, t + period, rtol, atol, h_max)
+        z, status = _advance(p, z, t, t + period, rtol, atol, period)
         if status != 0:
             return logs[:k], status
         t += period

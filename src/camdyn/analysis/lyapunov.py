@@ -168,7 +168,7 @@ def model_spectrum(system_id: int, p, y0, period: float, periods: int = 400, tra
     rtol, atol : float
         Local error tolerances of the state and the matrix [-], [units of the state].
     max_step : float, optional
-        Largest step [s]; default T / 32.
+        Largest step [s]; default that of :func:`~camdyn.simulation.limits.step_limits`.
     progress : callable, optional
         ``progress(done, total)`` after each period [-].
 
@@ -180,14 +180,16 @@ def model_spectrum(system_id: int, p, y0, period: float, periods: int = 400, tra
     periods = _count("periods", periods, 1)
     transient = _count("transient", transient, 0)
     t_start = limits.check_number("t_start", t_start, "s")
-    h_max = period / 32.0 if max_step is None else limits.check_number("max_step", max_step, "s")
+    h_max, scan = limits.step_limits(period, system_id)
+    h_max = h_max if max_step is None else limits.check_number("max_step", max_step, "s")
     if not (math.isfinite(h_max) and h_max > 0):
         raise ParameterError(f"max_step must be a positive number of seconds, got {max_step!r}")
     size, n = y0.size, weights.size
     y, t = y0.copy(), t_start
     for k in range(transient):
         out, _, _, counters = driver.integrate(system_id, p, y, t, t + period, np.array([t + period]), float(rtol),
-                                               float(atol), h_max, driver.METHOD_AUTO, MAX_STEPS, MAX_EVENTS, True)
+                                               float(atol), h_max, driver.METHOD_AUTO, MAX_STEPS, MAX_EVENTS, True,
+                                               scan)
         limits.check_run(counters, "Lyapunov spectrum's transient")
         y, t = out[0].copy(), t + period   # summed period by period, as lyapunov_exponent does
         if progress:
@@ -201,7 +203,7 @@ def model_spectrum(system_id: int, p, y0, period: float, periods: int = 400, tra
         start[:n, :n] = tangent / weights[:, None]   # D^-1 Q
         out, _, _, counters = driver.integrate(variational, p, np.concatenate([y, start.ravel()]), t, t + period,
                                                np.array([t + period]), float(rtol), float(atol), h_max,
-                                               driver.METHOD_DOP853, MAX_STEPS, MAX_EVENTS, True)
+                                               driver.METHOD_DOP853, MAX_STEPS, MAX_EVENTS, True, scan)
         limits.check_run(counters, "Lyapunov spectrum's variational run")
         events += int(counters[driver.COUNT_EVENTS])
         end = out[-1]

@@ -173,6 +173,15 @@ def _full(problem: Problem, x: np.ndarray, value: float) -> np.ndarray:
     return problem.full_state(x, value)
 
 
+def _driver_settings(problem: Problem, period: float, max_steps: int = 50_000_000) -> tuple:
+    """The driver's arguments after the tolerances for the problem's model forced with
+    period ``period`` [s]: the largest step [s] and the scan interval [s] of
+    :func:`~camdyn.simulation.limits.step_limits`, DOP853, the limits on steps and
+    events, interruptible."""
+    h_max, scan = limits.step_limits(period, problem.system_id)
+    return h_max, driver.METHOD_DOP853, int(max_steps), 100_000, True, scan
+
+
 def flow(problem: Problem, x, value: float | None = None, periods: int = 1, samples: int = 0,
          max_steps: int = MAX_STEPS) -> Flow:
     """Integrate the variational system from unknowns ``x`` at ``t_start`` over
@@ -195,8 +204,7 @@ def _variational(problem: Problem, p, period, x, value, t0, t1, samples, max_ste
     start = np.concatenate([y0, np.eye(n).ravel()])
     rtol, atol = problem.matrix_tolerances()
     y, modes, log, counters = driver.integrate(systems.VARIATIONAL + problem.system_id, p, start, t0, t1, times,
-                                           rtol, atol, period / 32.0, driver.METHOD_DOP853,
-                                           int(max_steps), 100_000, True)
+                                           rtol, atol, *_driver_settings(problem, period, max_steps))
     limits.check_run(counters, f"shooting run at {problem.name} = {value:g}")
     on_contact = log[:, driver.EVENT_GUARD] == 0
     if not problem.impacts:
@@ -236,8 +244,7 @@ def shoot(problem: Problem, x, value: float, periods: int = 1) -> np.ndarray:
 
 def _plain(problem: Problem, p, period, x, value, t0, t1) -> np.ndarray:
     y, _, _, counters = driver.integrate(problem.system_id, p, _full(problem, x, value), t0, t1,
-                                         np.array([t1]), problem.rtol, problem.atol, period / 32.0,
-                                         driver.METHOD_DOP853, 50_000_000, 100_000, True)
+                                         np.array([t1]), problem.rtol, problem.atol, *_driver_settings(problem, period))
     limits.check_run(counters, f"shooting run at {problem.name} = {value:g}")
     return y[-1, :problem.unknowns].copy()
 
@@ -254,8 +261,7 @@ def transient_state(problem: Problem, periods: int = 50, value: float | None = N
     t1 = t0 + periods * period
     start = problem.full_state(problem.template[:problem.unknowns], value)
     y, _, _, counters = driver.integrate(problem.system_id, p, start, t0, t1, np.array([t1]),
-                                         problem.rtol * 100, problem.atol * 100, period / 32.0,
-                                         driver.METHOD_DOP853, 50_000_000, 100_000, True)
+                                         problem.rtol * 100, problem.atol * 100, *_driver_settings(problem, period))
     limits.check_run(counters, "transient run")
     return y[-1, :problem.unknowns].copy()
 
@@ -381,8 +387,8 @@ def _segment_starts(problem: Problem, start, value: float, times: np.ndarray, tr
         return states.copy()
     p, period = problem.build(value)
     y, _, _, counters = driver.integrate(problem.system_id, p, _full(problem, states, value), times[0], times[-1],
-                                         times[:-1].copy(), problem.rtol, problem.atol, period / 32.0,
-                                         driver.METHOD_DOP853, 50_000_000, 100_000, True)
+                                         times[:-1].copy(), problem.rtol, problem.atol,
+                                         *_driver_settings(problem, period))
     limits.check_run(counters, "run to the segments' starts")
     return y[:, :u].copy()
 

@@ -5,6 +5,16 @@ the guard's own cubic Hermite polynomial (from its exact rates at both ends), or
 midpoint for a guard whose rate is unknown; the earliest sign change against the
 expected sign is located by the Illinois method on the step's continuous extension.
 
+The cubic is only accurate on a short interval (its error grows as the interval's fourth
+power): a step longer than the scan interval the caller gives (``scan`` [s]) is scanned
+on its continuous extension (:func:`scan_crossing`). The guards and their rates are
+evaluated at its midpoint (the state's rate from the extension's derivative after a
+DOP853 step, from the right-hand side after the others); where every active guard stays
+clear of zero on both half-step cubics by more than the whole-step cubic's error there
+(:func:`clear_margin`), the step holds no crossing; else it is split into an even number
+of equal sub-intervals no longer than ``scan``, each checked as a short step would be. A
+step no longer than ``scan`` is checked as a whole, with the very arithmetic of before.
+
 The functions marked ``inline="always"`` are compiled into the driver's loop (numba IR
 inlining), so that they add no call per step.
 """
@@ -16,7 +26,7 @@ import math
 import numba
 
 from camdyn.integrator.counters import COUNT_RHS, COUNT_ROOT_ITERATIONS
-from camdyn.integrator.steppers import dense, dop853_extend
+from camdyn.integrator.steppers import KIND_DOP853, dense, dop853_dense_rate, dop853_extend
 from camdyn.systems import registry as systems
 
 
@@ -169,10 +179,157 @@ def first_crossing(system, k, s, t, h, y, f, y1, f1, dwork, kind, mode, p, k16, 
     return prev, found, ready
 
 
+@numba.njit(cache=True)
+def interior_guards(system, t, h, tau, y0, f0, y1, f1, work, kind, mode, p, ytmp, rate, vals, rates, counters):
+    """Guards ``vals`` and their rates ``rates`` at the fraction ``tau`` of the step of
+    ``h`` [s] from ``t`` [s], on the step's continuous extension; the state's rate there
+    (into ``rate``) is the extension's derivative after a DOP853 step, else the
+    right-hand side (one call, counted)."""
+    dense(tau, h, y0, f0, y1, f1, work, kind, ytmp)
+    if kind == KIND_DOP853:
+        dop853_dense_rate(tau, h, work, rate)
+    else:
+        systems.rhs(system, t + tau * h, ytmp, mode, p, rate)
+        counters[COUNT_RHS] += 1
+    systems.guards(system, t + tau * h, ytmp, rate, True, p, vals, rates)
+
+
+@numba.njit(cache=True)
+def crossing_between(system, ta, tb, t, h, y, f, y1, f1, dwork, kind, mode, p, ytmp, ga, gra, gb, grb, pts, g_tmp,
+                     gr_tmp, counters):
+    """The earliest guard crossing in the sub-interval ``(ta, tb]`` (fractions of the step
+    of ``h`` [s] from ``t`` [s]) from the guards ``ga``, ``gb`` and their rates ``gra``,
+    ``grb`` at its ends: each active guard sampled at its cubic's extrema (or the
+    sub-interval's midpoint when a rate is unknown) and at ``tb``, as a whole step is.
+    Returns where it lies (a fraction of the step, 2 if none) and the guard (-1 if none)."""
+    tau_event = 2.0
+    k_event = -1
+    width = tb - ta
+    for k in range(ga.shape[0]):
+        s = systems.expected_sign(system, k, mode, p)
+        if s == 0.0:
+            continue
+        has_rate = not (math.isnan(gra[k]) or math.isnan(grb[k]))
+        ext1 = -1.0
+        ext2 = -1.0
+        if has_rate:
+            ext1, ext2 = cubic_extrema(ga[k], gb[k], gra[k], grb[k], width * h)
+        sample_points(pts, ext1, ext2, has_rate)
+        prev = ta
+        found = -1.0
+        for j in range(4):
+            if pts[j] <= 0.0 or pts[j] > 1.0:
+                continue
+            if pts[j] == 1.0:
+                tau = tb
+                v = s * gb[k]
+            else:
+                tau = ta + pts[j] * width
+                guard_at(system, t, h, tau, y, f, y1, f1, dwork, kind, p, ytmp, g_tmp, gr_tmp)
+                v = s * g_tmp[k]
+            if v < 0.0:
+                found = tau
+                break
+            prev = tau
+        if found > 0.0 and prev < tau_event:
+            tau_k = locate_crossing(system, k, s, t, h, prev, found, y, f, y1, f1, dwork, kind, p, ytmp, g_tmp,
+                                    gr_tmp, counters)
+            if tau_k < tau_event:
+                tau_event = tau_k
+                k_event = k
+    return tau_event, k_event
+
+
+@numba.njit(cache=True, inline="always")
+def cubic_value(g0, g1, r0, r1, h, tau):
+    """A guard's cubic Hermite over a step of ``h`` [s] (values ``g0``, ``g1``, rates
+    ``r0``, ``r1`` [1/s] at its ends, as in :func:`cubic_extrema`) at the fraction ``tau``."""
+    d0 = h * r0
+    d1 = h * r1
+    a3 = 2.0 * g0 + d0 - 2.0 * g1 + d1
+    a2 = -3.0 * g0 - 2.0 * d0 + 3.0 * g1 - d1
+    return g0 + tau * (d0 + tau * (a2 + tau * a3))
+
+
+@numba.njit(cache=True, inline="always")
+def cubic_lowest(s, g0, g1, r0, r1, h):
+    """The smallest value of ``s`` times a guard's cubic over a step of ``h`` [s] (from
+    its ends and the extrema inside)."""
+    low = min(s * g0, s * g1)
+    ext1, ext2 = cubic_extrema(g0, g1, r0, r1, h)
+    if 0.0 < ext1 < 1.0:
+        low = min(low, s * cubic_value(g0, g1, r0, r1, h, ext1))
+    if 0.0 < ext2 < 1.0:
+        low = min(low, s * cubic_value(g0, g1, r0, r1, h, ext2))
+    return low
+
+
+@numba.njit(cache=True)
+def clear_margin(system, h, mode, p, g, gr, g1, gr1, gm, grm):
+    """Whether every active guard keeps its expected sign on the step of ``h`` [s] with
+    room to spare: the lowest point of its two half-step cubics (through the guard ``gm``
+    and rate ``grm`` at the midpoint) lies further from zero than the whole-step cubic
+    misses the midpoint by. That miss estimates the whole cubic's error, which a half
+    cubic's is about 1/16 of (the error of cubic Hermite interpolation grows as the
+    interval's fourth power)."""
+    for k in range(g.shape[0]):
+        s = systems.expected_sign(system, k, mode, p)
+        if s == 0.0:
+            continue
+        if math.isnan(gr[k]) or math.isnan(gr1[k]) or math.isnan(grm[k]):
+            return False
+        miss = abs(gm[k] - cubic_value(g[k], g1[k], gr[k], gr1[k], h, 0.5))
+        low = min(cubic_lowest(s, g[k], gm[k], gr[k], grm[k], 0.5 * h),
+                  cubic_lowest(s, gm[k], g1[k], grm[k], gr1[k], 0.5 * h))
+        if not low > miss:
+            return False
+    return True
+
+
+@numba.njit(cache=True)
+def scan_crossing(system, t, h, scan, y, f, y1, f1, dwork, kind, mode, p, ytmp, g, gr, g1, gr1, pts, g_tmp,
+                  gr_tmp, scan_arrays, counters):
+    """The earliest guard crossing in a step of ``h`` [s] from ``t`` [s] longer than
+    ``scan`` [s] (its continuous extension ready; the guards ``g``, ``g1`` and rates
+    ``gr``, ``gr1`` at its ends). The guards are evaluated at the midpoint; where every
+    active guard keeps a clear margin (:func:`clear_margin`) there is none; else the step
+    is split into an even number of equal sub-intervals no longer than ``scan``, each
+    checked by :func:`crossing_between` in turn until one holds a crossing.
+    ``scan_arrays``: a state's rate and guards and rates at three points. Returns as
+    :func:`crossing_between`."""
+    rate, ga, gra, gb, grb, gm, grm = scan_arrays
+    interior_guards(system, t, h, 0.5, y, f, y1, f1, dwork, kind, mode, p, ytmp, rate, gm, grm, counters)
+    if clear_margin(system, h, mode, p, g, gr, g1, gr1, gm, grm):
+        return 2.0, -1
+    pieces = 2 * int(math.ceil(0.5 * h / scan))
+    for i in range(g.shape[0]):
+        gb[i] = g[i]
+        grb[i] = gr[i]
+    for j in range(pieces):
+        for i in range(g.shape[0]):
+            ga[i] = gb[i]
+            gra[i] = grb[i]
+        ta = j / pieces
+        tb = (j + 1) / pieces
+        if j == pieces - 1 or 2 * (j + 1) == pieces:
+            tb = 1.0 if j == pieces - 1 else 0.5
+            for i in range(g.shape[0]):
+                gb[i] = g1[i] if j == pieces - 1 else gm[i]
+                grb[i] = gr1[i] if j == pieces - 1 else grm[i]
+        else:
+            interior_guards(system, t, h, tb, y, f, y1, f1, dwork, kind, mode, p, ytmp, rate, gb, grb, counters)
+        tau_event, k_event = crossing_between(system, ta, tb, t, h, y, f, y1, f1, dwork, kind, mode, p, ytmp, ga,
+                                              gra, gb, grb, pts, g_tmp, gr_tmp, counters)
+        if k_event >= 0:
+            return tau_event, k_event
+    return 2.0, -1
+
+
 @numba.njit(cache=True, inline="always")
 def earliest_crossing(system, t, h, y, f, y1, f1, dwork, kind, mode, p, k16, ytmp, f7, g, gr, g1, gr1, gv, pts,
-                      g_tmp, gr_tmp, ready, counters):
-    """The earliest guard crossing in the step (see the module's algorithm, steps 3-4).
+                      g_tmp, gr_tmp, ready, scan, scan_arrays, counters):
+    """The earliest guard crossing in the step (see the module's algorithm, steps 3-4);
+    a step longer than ``scan`` [s] is scanned on sub-intervals (:func:`scan_crossing`).
 
     Returns
     -------
@@ -183,6 +340,11 @@ def earliest_crossing(system, t, h, y, f, y1, f1, dwork, kind, mode, p, k16, ytm
     ready : bool
         Whether the continuous extension is ready.
     """
+    if h > scan:
+        ready = ensure_extension(ready, system, t, y, h, y1, f1, mode, p, k16, ytmp, f7, counters)
+        tau_event, k_event = scan_crossing(system, t, h, scan, y, f, y1, f1, dwork, kind, mode, p, ytmp, g, gr, g1,
+                                           gr1, pts, g_tmp, gr_tmp, scan_arrays, counters)
+        return tau_event, k_event, ready
     tau_event = 2.0
     k_event = -1
     for k in range(g.shape[0]):

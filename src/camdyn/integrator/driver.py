@@ -146,8 +146,8 @@ def _allocate(system, y_start, n_out, max_events):
 
 @numba.njit(cache=True, inline="always")
 def _workspace(n, m):
-    """Scratch arrays of one run: stepper stages, the Rosenbrock
-    iteration matrix and its pivots, the Adams history, states [n] and guard values [m]."""
+    """Scratch arrays of one run: stepper stages, the Rosenbrock iteration matrix and its
+    pivots, the Adams history, states [n], guard values [m], and the guard scan's."""
     history = np.zeros((history_rows(n), n))
     history[TIME, 0] = np.nan   # no history yet: the first Adams step starts at order 1
     stage_arrays = (np.empty((6, n)), np.empty((6, n)), np.empty((16, n)), np.empty((7, n)), np.empty(n),
@@ -155,7 +155,8 @@ def _workspace(n, m):
     states = (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n))
     guards = (np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m),
               np.empty(m))
-    return stage_arrays, states, guards
+    scan_arrays = (np.empty(n), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m))
+    return stage_arrays, states, guards, scan_arrays
 
 
 @numba.njit(cache=True, inline="always")
@@ -395,21 +396,17 @@ def _fill_end(t, y, mode, t_out, i_out, y_out, mode_out, counters):
 
 @numba.njit(cache=True, pipeline_class=InlinedPipeline)
 def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, method, max_steps,
-              max_events, interruptible=False):
+              max_events, interruptible=False, scan=math.inf):
     """Integrate a registered hybrid system from ``t_start`` to ``t_end``.
 
     Parameters
     ----------
-    system : int
-        System id (:mod:`camdyn.systems.registry`).
-    p : ndarray
-        Parameter vector.
+    system, p : int, ndarray
+        System id (:mod:`camdyn.systems.registry`) and its parameter vector.
     y_start : ndarray (n,)
         Initial state, of the system's ``state_size`` components.
-    t_start, t_end : float
-        Time span [s].
-    t_out : ndarray
-        Increasing output times [s] within the span.
+    t_start, t_end, t_out : float, float, ndarray
+        Time span [s] and the increasing output times [s] within it.
     rtol : float
         Relative tolerance of the local error [-].
     atol : float or ndarray
@@ -427,6 +424,9 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
         Poll for Ctrl-C every :data:`~camdyn.integrator.interrupt.POLL_STEPS` steps and
         stop with ``STATUS_INTERRUPTED`` (the caller raises ``KeyboardInterrupt``). Only
         for calls that hold the GIL: not from ``nogil`` or ``parallel`` kernels.
+    scan : float
+        Longest interval [s] whose guards one cubic checks: a longer step is scanned on
+        sub-intervals (:mod:`camdyn.integrator.crossings`); default none.
 
     Returns
     -------
@@ -438,7 +438,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     counters : ndarray (COUNT_SIZE,) of int64
     """
     y_out, mode_out, events, counters, y, mode = _allocate(system, y_start, t_out.shape[0], max_events)
-    stage_arrays, states, guards = _workspace(y.shape[0], events.shape[1] - EVENT_GUARDS - y.shape[0])
+    stage_arrays, states, guards, scan_arrays = _workspace(y.shape[0], events.shape[1] - EVENT_GUARDS - y.shape[0])
     work, stages, k16, f7, err3, h_regime, pts, matrix, pivots, history = stage_arrays
     y1, f, f1, err, ytmp, ymid, yo = states
     g, gr, g1, gr1, gv, grv, g_tmp, gr_tmp = guards
@@ -471,7 +471,8 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
         ready = midpoint_guards(system, t, h, y, f, y1, f1, dwork, kind, mode, p, k16, ytmp, f7, ymid, gr, gr1,
                                 gv, grv, ready, counters)
         tau_event, k_event, ready = earliest_crossing(system, t, h, y, f, y1, f1, dwork, kind, mode, p, k16, ytmp,
-                                                      f7, g, gr, g1, gr1, gv, pts, g_tmp, gr_tmp, ready, counters)
+                                                      f7, g, gr, g1, gr1, gv, pts, g_tmp, gr_tmp, ready, scan,
+                                                      scan_arrays, counters)
         h, retried, lost = retake(system, mode, p, h_regime, k_event, tau_event, h, retried, lost, counters)
         if k_event >= 0 and not retried:
             t_new, i_out, monitor_max = cut_at_event(system, tau_event, t, h, y, f, y1, f1, dwork, kind, mode, p,

@@ -113,6 +113,26 @@ def dop853_dense(tau, y0, work, out):
         out[i] = y0[i] + acc
 
 
+@numba.njit(cache=True, inline="always")
+def dop853_dense_rate(tau, h, work, out):
+    """Rate ``dy/dt`` at ``t + tau h`` inside a DOP853 step of ``h`` [s]: the derivative
+    of the polynomial of :func:`dop853_dense` (Horner's scheme carrying the derivative,
+    ``d/dtau`` of ``v tau + c`` is ``v' tau + v`` and of ``v (1 - tau) + c`` is
+    ``v' (1 - tau) - v``), divided by ``h``."""
+    s = 1.0 - tau
+    for i in range(out.shape[0]):
+        v = work[6, i]
+        d = 0.0
+        for r in range(5, -1, -1):   # rows 5, 3, 1 after a factor tau; 4, 2, 0 after 1 - tau
+            if r % 2 == 1:
+                d = d * tau + v
+                v = v * tau + work[r, i]
+            else:
+                d = d * s - v
+                v = v * s + work[r, i]
+        out[i] = (d * tau + v) / h   # the last factor tau
+
+
 @numba.njit(cache=True)
 def dense(tau, h, y0, f0, y1, f1, work, kind, out):
     """State at ``t + tau h`` inside the last step.

@@ -197,7 +197,7 @@ def simulate_flexible_pivot(system: System, pivot_stiffness: float, pivot_dampin
     method : {"auto", "dop853", "explicit", "rosenbrock"}
         Stepper choice (``auto``: DOP853).
     max_step : float, optional
-        Largest step [s]; default 1/32 of the cam period.
+        Largest step [s]; default 1/12 of the cam period (guards checked every 1/32).
 
     Returns
     -------

@@ -41,6 +41,7 @@ from camdyn.model.geometry import cam_angle, contact_kinematics
 from camdyn.params.config import system_to_toml
 from camdyn.params.system import System
 from camdyn.params.units import parse_speed
+from camdyn.simulation import limits
 from camdyn.simulation.runner import prepare
 from camdyn.systems import registry as systems
 
@@ -163,14 +164,14 @@ def _flights(p, y, duration, period, t_out, y_out, rtol, atol, law, limit, pulse
     """
     t = 0.0
     rows = []
-    h_max = period / 32.0
+    h_max, scan = limits.step_limits(period)
     while t < duration:
         mask = t_out >= t
         span_end = min(duration, t + 1.5 * period)
         times = t_out[mask & (t_out <= span_end)]
         ys, modes, events, counters = driver.integrate(
             systems.CAM_FOLLOWER, p, y, t, span_end, times if times.size else np.array([span_end]),
-            rtol, atol, h_max, driver.METHOD_DOP853, 10_000_000, 64)
+            rtol, atol, h_max, driver.METHOD_DOP853, 10_000_000, 64, False, scan)
         if counters[driver.COUNT_STATUS] != driver.STATUS_OK:
             raise SimulationError(f"impact-map simulation {driver.STATUS_MESSAGES[int(counters[driver.COUNT_STATUS])]}"
                                   f" near t = {t:.6g} s")

@@ -17,10 +17,12 @@ import numpy as np
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.integrator import driver
 from camdyn.params.system import System
+from camdyn.systems import registry as systems
 
 __all__ = ["LargeResultWarning", "check_number", "check_system", "check_tolerances", "check_sampling",
            "result_bytes", "available_memory", "check_memory", "event_room", "with_room_for_events",
-           "RTOL_RANGE", "ATOL_RANGE", "MIN_SAMPLES_PER_PERIOD", "WARN_BYTES"]
+           "RTOL_RANGE", "ATOL_RANGE", "MIN_SAMPLES_PER_PERIOD", "WARN_BYTES", "STEP_FRACTION",
+           "SCAN_FRACTION", "LONG_STEP_MODELS", "step_limits"]
 
 #: Sensible relative tolerances [-]: tighter than 1e-14 is below double precision's
 #: resolution of the state; looser than 1e-2 no longer resolves the contact.
@@ -34,6 +36,20 @@ MIN_SAMPLES_PER_PERIOD = 4
 WARN_SAMPLES_PER_PERIOD = 64
 #: Result size above which a warning names it [B].
 WARN_BYTES = 500e6
+#: The cam-follower's largest step, as a fraction of the cam period [-], chosen by
+#: measurement (docs/integrator.md, *Long steps: the guard scan*): the longest of 1/4,
+#: 1/8, 1/10, 1/12, 1/16 and 1/32 with which the error of the chapter 3 and chapter 4
+#: rigs still falls at every rung of rtol from 1e-4 to 3e-11 (with 1/8 and 1/10 a loose
+#: rung rose or stalled).
+STEP_FRACTION = 1.0 / 12.0
+#: The cam-follower's scan interval, as a fraction of the cam period [-]: the longest
+#: interval whose guards one cubic checks (:mod:`camdyn.integrator.crossings`; longer
+#: steps are scanned on their continuous extension), so that no contact is skipped in
+#: free flight.
+SCAN_FRACTION = 1.0 / 32.0
+#: The models that step up to :data:`STEP_FRACTION` of the period (:func:`step_limits`).
+LONG_STEP_MODELS = (systems.CAM_FOLLOWER, systems.DRIVEN_CAM, systems.FLEXIBLE_PIVOT, systems.TWO_FOLLOWERS,
+                    systems.DRIVEN_CAM_ANGLE, systems.TWO_FOLLOWERS_ANGLE)
 #: Bytes per output sample and channel at the peak of assembling the result: 8 for the
 #: value and the temporaries (measured peak 9.6 B with tracemalloc for 1.65 million samples
 #: of the chapter 3 rig), rounded up [B].
@@ -42,6 +58,18 @@ BYTES_PER_VALUE = 12
 
 class LargeResultWarning(UserWarning):
     """A result, or a sampling choice, that the user should know about before waiting."""
+
+
+def step_limits(period: float, model: int = systems.CAM_FOLLOWER) -> tuple[float, float]:
+    """The largest step [s] and scan interval [s] of a run of registered ``model``
+    forced with period ``period`` [s]: :data:`STEP_FRACTION` and :data:`SCAN_FRACTION`
+    of it for the cam-follower and the mechanisms built on its contact
+    (:data:`LONG_STEP_MODELS`); for the other models (the oscillators that test the
+    integrator, the translating follower, stick-slip), whose orbits and spectra were
+    measured with steps of at most :data:`SCAN_FRACTION`, that fraction for both."""
+    if model in LONG_STEP_MODELS:
+        return period * STEP_FRACTION, period * SCAN_FRACTION
+    return period * SCAN_FRACTION, period * SCAN_FRACTION
 
 
 def check_number(name: str, value, unit: str = "") -> float:

@@ -19,7 +19,7 @@ from camdyn.integrator import driver
 from camdyn.model import driven_cam, stick_slip
 from camdyn.params.system import System
 from camdyn.simulation import limits
-from camdyn.simulation.runner import METHODS, default_max_step, prepare
+from camdyn.simulation.runner import METHODS, default_max_step, default_scan, prepare
 from camdyn.systems import registry as systems
 
 __all__ = ["CamDrive", "DrivenCamRig", "simulate_driven_cam", "simulate_stick_slip", "speed_fluctuation",
@@ -155,7 +155,8 @@ def _run_counters(system_id, p, y0, duration, sample_rate, period, rtol, atol, m
     start = _time.perf_counter()
     y, modes, events, counters = limits.with_room_for_events(
         lambda room: driver.integrate(system_id, p.copy(), y0, 0.0, float(duration), t_out, float(rtol), float(atol),
-                                      float(max_step), METHODS[method], 50_000_000, room, True), max_events)
+                                      float(max_step), METHODS[method], 50_000_000, room, True,
+                                      default_scan(period, duration)), max_events)
     elapsed = _time.perf_counter() - start
     limits.check_run(counters, "simulation")
     return t_out, y, modes, events, counters, elapsed
@@ -196,7 +197,7 @@ def simulate_driven_cam(system: System, drive: CamDrive, revolutions: float = 5.
     method : {"auto", "dop853", "explicit", "rosenbrock"}
         Stepper choice (``auto``: DOP853).
     max_step : float, optional
-        Largest step [s]; default 1/32 of the starting period.
+        Largest step [s]; default 1/12 of the starting period (guards checked every 1/32).
 
     Returns
     -------

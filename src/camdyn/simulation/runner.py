@@ -186,8 +186,10 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
     initial_state : (float, float), optional
         ``(alpha [rad], alpha_dot [rad/s])``; default the static equilibrium at ``Theta0``.
     max_step : float, optional
-        Largest step [s]; default 1/32 of the cam period, so that no contact is
-        skipped in free flight.
+        Largest step [s]; default 1/12 of the cam period (:func:`default_max_step`).
+        Whatever the step, the contact guards are checked at least every 1/32 of the
+        period (a longer step is scanned on its continuous extension,
+        :func:`default_scan`), so that no contact is skipped in free flight.
     max_steps : int
         Largest number of accepted steps.
     variables : sequence of str, optional
@@ -233,7 +235,8 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
     start = _time.perf_counter()
     y, modes, events, counters = limits.with_room_for_events(
         lambda room: driver.integrate(systems.CAM_FOLLOWER, prep.p.copy(), y0, 0.0, float(duration), t_out, float(rtol),
-                                      float(atol), float(max_step), METHODS[method], int(max_steps), room, True),
+                                      float(atol), float(max_step), METHODS[method], int(max_steps), room, True,
+                                      default_scan(period, duration)),
         max_events)
     elapsed = _time.perf_counter() - start
     status = int(counters[driver.COUNT_STATUS])
@@ -267,9 +270,17 @@ def starting_state(prep: Prepared, initial_state=None) -> np.ndarray:
 
 
 def default_max_step(period: float, duration: float) -> float:
-    """The largest step [s] by default: 1/32 of the cam period [s], or 1/64 of the
-    duration [s] when the cam stands still."""
-    return period / 32.0 if math.isfinite(period) else duration / 64.0
+    """The largest step [s] by default: :data:`~camdyn.simulation.limits.STEP_FRACTION`
+    (1/12) of the cam period [s], or 1/64 of the duration [s] when the cam stands still."""
+    return limits.step_limits(period)[0] if math.isfinite(period) else duration / 64.0
+
+
+def default_scan(period: float, duration: float) -> float:
+    """The scan interval [s], the longest interval whose guards one cubic checks (a
+    longer step is scanned on its continuous extension,
+    :mod:`camdyn.integrator.crossings`): :data:`~camdyn.simulation.limits.SCAN_FRACTION`
+    (1/32) of the cam period [s], or 1/64 of the duration [s] when the cam stands still."""
+    return limits.step_limits(period)[1] if math.isfinite(period) else duration / 64.0
 
 
 def check_variables(variables) -> frozenset:

@@ -19,7 +19,7 @@ from camdyn.integrator import driver
 from camdyn.params.schema import parameter_index
 from camdyn.params.system import System
 from camdyn.simulation import limits
-from camdyn.simulation.runner import default_max_step, prepare, starting_state, with_speed
+from camdyn.simulation.runner import default_max_step, default_scan, prepare, starting_state, with_speed
 from camdyn.systems import registry as systems
 
 __all__ = ["Sensitivity", "state_transition", "integrate_variational", "parameter_directions"]
@@ -81,7 +81,7 @@ def _packed_directions(p: np.ndarray, directions, steps) -> tuple[np.ndarray, in
 def integrate_variational(system_id: int, p: np.ndarray, y0, t_start: float, t_end: float, rtol: float = 1e-10,
                           atol: float = 1e-12, max_step: float = math.inf, max_steps: int = 50_000_000,
                           max_events: int = 100_000, directions=None, steps=None,
-                          names: tuple = ()) -> Sensitivity:
+                          names: tuple = (), scan: float = math.inf) -> Sensitivity:
     """Integrate registered model ``system_id`` (:mod:`camdyn.systems.registry`) from
     ``y0`` over ``[t_start, t_end]`` [s] with its state-transition matrix, starting from
     the identity, and with ``d y / d q_j`` for each row of ``directions`` (``dp/dq_j``,
@@ -100,7 +100,8 @@ def integrate_variational(system_id: int, p: np.ndarray, y0, t_start: float, t_e
     y, _, events, counters = driver.integrate(variational, packed, start,
                                               float(t_start), float(t_end), np.array([float(t_end)]), float(rtol),
                                               float(atol), float(min(max_step, t_end - t_start)),
-                                              driver.METHOD_DOP853, int(max_steps), int(max_events), True)
+                                              driver.METHOD_DOP853, int(max_steps), int(max_events), True,
+                                              float(scan))
     limits.check_run(counters, "sensitivity run")
     end = y[-1]
     return Sensitivity(float(t_end), end[:n].copy(), end[n:n + n * n].reshape(n, n).copy(),
@@ -176,4 +177,5 @@ def state_transition(system: System, duration: float | None = None, speed=None, 
     directions, steps = parameter_directions(system, parameters) if parameters else (None, None)
     return integrate_variational(systems.CAM_FOLLOWER, prep.p, starting_state(prep, initial_state), float(t_start),
                                  float(t_start) + duration, rtol, atol, default_max_step(period, duration),
-                                 directions=directions, steps=steps, names=tuple(parameters))
+                                 directions=directions, steps=steps, names=tuple(parameters),
+                                 scan=default_scan(period, duration))

@@ -200,7 +200,7 @@ def simulate_two_followers(system: System, drive: CamDrive, second: System | Non
     method : {"auto", "dop853", "explicit", "rosenbrock"}
         Stepper choice (``auto``: DOP853).
     max_step : float, optional
-        Largest step [s]; default 1/32 of the starting period.
+        Largest step [s]; default 1/12 of the starting period (guards checked every 1/32).
 
     Returns
     -------

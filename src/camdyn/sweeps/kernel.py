@@ -21,6 +21,7 @@ import numpy as np
 from camdyn.integrator import driver
 from camdyn.model.geometry import rigid_angles
 from camdyn.model.outputs import derived
+from camdyn.simulation.limits import SCAN_FRACTION, STEP_FRACTION
 from camdyn.systems import registry as systems
 
 #: channels of the window, in the order of the kernel's ``window`` output
@@ -87,13 +88,13 @@ def simulate_points(params, starts, periods, revolutions, discard, samples, rtol
             t_out[k] = t_start_window + k * (period / samples)
         t_end = revolutions * period
         y, modes, events, count = driver.integrate(
-            systems.CAM_FOLLOWER, p, starts[i], 0.0, t_end, t_out, rtol, atol, period / 32.0,
-            driver.METHOD_AUTO, max_steps, max_events)
+            systems.CAM_FOLLOWER, p, starts[i], 0.0, t_end, t_out, rtol, atol, period * STEP_FRACTION,
+            driver.METHOD_AUTO, max_steps, max_events, False, period * SCAN_FRACTION)
         if count[driver.COUNT_EVENTS_DROPPED] > 0 and count[driver.COUNT_STATUS] == driver.STATUS_OK:
             # the log ran out of room: the same run again, with room for every event
             y, modes, events, count = driver.integrate(
-                systems.CAM_FOLLOWER, p, starts[i], 0.0, t_end, t_out, rtol, atol, period / 32.0,
-                driver.METHOD_AUTO, max_steps, count[driver.COUNT_EVENTS] + 16)
+                systems.CAM_FOLLOWER, p, starts[i], 0.0, t_end, t_out, rtol, atol, period * STEP_FRACTION,
+                driver.METHOD_AUTO, max_steps, count[driver.COUNT_EVENTS] + 16, False, period * SCAN_FRACTION)
         counters[i, :] = count
         if count[driver.COUNT_STATUS] != driver.STATUS_OK:
             continue
