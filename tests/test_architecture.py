@@ -305,3 +305,77 @@ def test_checker_long_modules(lines, flagged):
 def test_module_names():
     assert module_name(SRC / PACKAGE / "integrator" / "driver.py") == "camdyn.integrator.driver"
     assert module_name(SRC / PACKAGE / "integrator" / "__init__.py") == "camdyn.integrator"
+
+
+# --- leftovers and the architecture page against the tree -------------------------------
+
+#: A merge-conflict marker at the start of a line (written as a pattern so that this file
+#: does not match itself).
+CONFLICT_MARKER = re.compile(r"^(?:<{7}|>{7})(?: .*)?$|^={7}$", re.MULTILINE)
+ARCHITECTURE = ROOT / "docs" / "architecture.md"
+
+
+def conflict_markers(text: str) -> list[int]:
+    """Line numbers (1-based) of merge-conflict markers in ``text``."""
+    return [text.count("\n", 0, match.start()) + 1 for match in CONFLICT_MARKER.finditer(text)]
+
+
+def undocumented_modules(page: str, tree: dict[str, list[str]]) -> list[str]:
+    """Modules of ``tree`` (``{folder: [module file names]}``) that the architecture
+    ``page`` does not name in its folder's table row (the row that starts ``| `folder/` |``),
+    and folders that have no row."""
+    missing = []
+    for folder, names in sorted(tree.items()):
+        row = next((line for line in page.splitlines() if line.startswith(f"| `{folder}/` |")), None)
+        if row is None:
+            missing.append(f"{folder}/ (no row)")
+            continue
+        missing += [f"{folder}/{name}" for name in names if f"`{name}`" not in row]
+    return missing
+
+
+def _tracked_text_files() -> list[Path]:
+    import subprocess
+
+    listed = subprocess.run(["git", "ls-files", "-z"], cwd=ROOT, capture_output=True, check=False)
+    if listed.returncode != 0:   # not a git checkout (an sdist): every file under the root
+        return [p for p in ROOT.rglob("*") if p.is_file() and ".git" not in p.parts and ".venv" not in p.parts]
+    return [ROOT / name for name in listed.stdout.decode().split("\0") if name]
+
+
+def test_no_conflict_markers():
+    found = {}
+    for path in _tracked_text_files():
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (UnicodeDecodeError, OSError):
+            continue   # binary files (figures, records)
+        lines = conflict_markers(text)
+        if lines:
+            found[str(path.relative_to(ROOT))] = lines
+    assert not found, f"merge-conflict markers left in {found}"
+
+
+def test_architecture_page_names_every_module():
+    tree = {}
+    for folder in sorted(p for p in (SRC / PACKAGE).iterdir() if p.is_dir() and p.name != "__pycache__"):
+        tree[folder.name] = sorted(f.name for f in folder.glob("*.py") if f.name != "__init__.py")
+    assert undocumented_modules(ARCHITECTURE.read_text(encoding="utf-8"), tree) == []
+
+
+@pytest.mark.parametrize(("text", "lines"), [
+    ("a\n" + "<" * 7 + " HEAD\nb\n" + "=" * 7 + "\nc\n" + ">" * 7 + " branch\n", [2, 4, 6]),
+    ("a\n" + "=" * 8 + "\n" + "<" * 6 + " x\n", []),     # a rule of 8, a quote of 6: not markers
+    ("x " + "<" * 7 + " HEAD\n", []),                     # not at the start of a line
+])
+def test_checker_conflict_markers(text, lines):
+    assert conflict_markers(text) == lines
+
+
+@pytest.mark.parametrize(("page", "missing"), [
+    ("| `io/` | files: `netcdf.py` and `atomic.py` | x |\n", []),
+    ("| `io/` | files: `netcdf.py` | x |\n", ["io/atomic.py"]),
+    ("| `cli/` | `atomic.py` `netcdf.py` |\n", ["io/ (no row)"]),
+])
+def test_checker_undocumented_modules(page, missing):
+    assert undocumented_modules(page, {"io": ["atomic.py", "netcdf.py"]}) == missing
