@@ -24,6 +24,7 @@ __version__ = "0.1.0"
 __all__ = [
     "load_system", "list_presets", "simulate", "static_equilibrium", "natural_frequency",
     "Cam", "Contact", "Follower", "Friction", "Motion", "Spring", "System",
+    "Model", "Quantity",
     "CamdynError", "GeometryError", "ParameterError", "PresetError", "SimulationError", "UnitError",
     "UnknownKeyError",
 ]
@@ -44,6 +45,9 @@ def __getattr__(name):
     if name in _PARAMETERS:
         from camdyn.params import system
         return getattr(system, name)
+    if name in ("Model", "Quantity"):
+        from camdyn.systems import protocol
+        return getattr(protocol, name)
     if name == "simulate":
         from camdyn.simulation.runner import simulate
         return simulate

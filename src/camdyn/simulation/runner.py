@@ -26,6 +26,7 @@ from camdyn.params.system import System
 from camdyn.params.units import parse_speed
 from camdyn.simulation import limits
 from camdyn.systems import registry as systems
+from camdyn.systems.protocol import BoundModel, Model
 
 __all__ = ["simulate", "prepare", "impact_table", "Prepared", "penetration_resolution", "run_dataset"]
 
@@ -165,8 +166,10 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
 
     Parameters
     ----------
-    system : System
-        The cam-follower system (see :func:`camdyn.load_system`).
+    system : System, Model or BoundModel
+        The cam-follower system (see :func:`camdyn.load_system`), or a model of the model
+        protocol with its parameters (``Model.bind({...})``, docs/user-models.md; its
+        Dataset holds its states, output channels, modes and event table).
     speed : float or str, optional
         Cam speed [Hz] or text such as ``"693 rpm"``; default ``system.motion.speed``.
     revolutions : float
@@ -206,6 +209,14 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
         and ``long_name``; over ``impact``: the impact table. Attributes record the
         parameters (as TOML), the solver counters and the static equilibrium.
     """
+    if isinstance(system, (Model, BoundModel)):   # a model of the model protocol
+        if method != "auto" or variables is not None:
+            raise ParameterError("method and variables are not offered for a protocol model: leave them out")
+        from camdyn.simulation.models import simulate_model
+
+        return simulate_model(system.bind() if isinstance(system, Model) else system, speed=speed,
+                              revolutions=revolutions, duration=duration, sample_rate=sample_rate, rtol=rtol,
+                              atol=atol, initial_state=initial_state, max_step=max_step, max_steps=max_steps)
     limits.check_system(system)
     system = with_speed(system, speed)
     if method not in METHODS:

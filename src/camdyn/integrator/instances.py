@@ -1,0 +1,137 @@
+"""The driver compiled for one model: the integrator's source instantiated per model.
+
+The bundled driver (:mod:`camdyn.integrator.driver`) reaches its models through
+:mod:`camdyn.systems.registry`, a switch on integer ids compiled as a whole. A model
+described by a :class:`camdyn.systems.protocol.Model` (a user's model, written as numba
+functions outside the package) gets a driver of its own instead: the integrator's
+modules that call a model (:data:`MODEL_MODULES`) are written, unchanged but for their
+imports, into a package in camdyn's cache folder, beside a generated adapter module
+that gives the registry's functions for that one model
+(:func:`camdyn.systems.protocol.adapter_source`). numba compiles only that model's
+code, inlines it as it inlines the bundled models', and caches it on disk: a second
+process loads it without compiling.
+
+The package's name is a hash of the integrator's source, the adapter and the model's
+own module sources, so a change to any of them compiles a new driver instead of loading
+a stale one (numba's cache does not follow changes in called functions' modules).
+
+Measured (docs/user-models.md): numba caches neither a closure over the model's
+functions nor a driver that takes them as arguments across processes (the dispatcher
+types are keyed by object identity), which is why the driver is instantiated from
+source.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import os
+import re
+import shutil
+import sys
+import tempfile
+import threading
+from pathlib import Path
+from types import ModuleType
+
+from camdyn.errors import ParameterError
+
+__all__ = ["MODEL_MODULES", "cache_root", "instance", "instance_key"]
+
+#: The integrator's modules that call a model (through ``systems``), written again per
+#: model; the others (counters, tableaus, linear algebra, tolerances, the inlining pass,
+#: the Ctrl-C poll) are shared.
+MODEL_MODULES = ("nordsieck", "steppers", "sampling", "crossings", "events", "multistep", "driver")
+_HERE = Path(__file__).resolve().parent
+_REGISTRY_IMPORT = "from camdyn.systems import registry as systems"
+#: An import left pointing at the registry or at a bundled model-calling module.
+_STALE_IMPORT = re.compile(r"^\s*(?:from|import)\s+camdyn\.(?:systems|integrator\.(?:%s))\b" % "|".join(MODEL_MODULES),
+                           re.MULTILINE)
+_LOCK = threading.Lock()
+_LOADED: dict[str, ModuleType] = {}
+
+
+def cache_root() -> Path:
+    """The folder of the generated drivers: ``$CAMDYN_CACHE_DIR``, else
+    ``$XDG_CACHE_HOME/camdyn`` (``~/.cache/camdyn``), each under ``models/``."""
+    base = os.environ.get("CAMDYN_CACHE_DIR")
+    if not base:
+        base = os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.join(Path.home(), ".cache"), "camdyn")
+    return Path(base) / "models"
+
+
+def _integrator_sources() -> dict[str, str]:
+    return {name: (_HERE / f"{name}.py").read_text(encoding="utf-8") for name in MODEL_MODULES}
+
+
+def instance_key(adapter: str, dependencies: tuple[str, ...] = ()) -> str:
+    """The hash that names one model's driver package: of the integrator's model-calling
+    modules, the adapter's source and the sources of ``dependencies`` (the model's own
+    modules, as file paths)."""
+    digest = hashlib.sha256()
+    for name, text in sorted(_integrator_sources().items()):
+        digest.update(name.encode())
+        digest.update(text.encode())
+    digest.update(adapter.encode())
+    for path in dependencies:
+        digest.update(Path(path).read_bytes())
+    return digest.hexdigest()[:20]
+
+
+def _rewrite(text: str, package: str) -> str:
+    """A model-calling module's source with its imports pointed at the instance package."""
+    text = text.replace(_REGISTRY_IMPORT, f"from {package} import adapter as systems")
+    for name in MODEL_MODULES:
+        text = re.sub(rf"\bfrom camdyn\.integrator\.{name} import\b", f"from {package}.{name} import", text)
+    return text
+
+
+def _write_package(folder: Path, package: str, adapter: str) -> None:
+    """Write the package atomically: into a fresh temporary folder beside it, renamed
+    into place (a concurrent writer's identical package wins and ours is dropped)."""
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{package}.", dir=folder.parent))
+    try:
+        (staging / "__init__.py").write_text(f'"""camdyn: a driver generated for one model ({package})."""\n')
+        (staging / "adapter.py").write_text(adapter)
+        for name, text in _integrator_sources().items():
+            rewritten = _rewrite(text, package)
+            if re.search(_STALE_IMPORT, rewritten):
+                raise RuntimeError(f"integrator/{name}.py reaches the registry other than by {_REGISTRY_IMPORT!r}")
+            (staging / f"{name}.py").write_text(rewritten)
+        try:
+            os.rename(staging, folder)
+        except OSError:
+            if not (folder / "driver.py").exists():
+                raise
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+
+
+def instance(adapter: str, dependencies: tuple[str, ...] = ()) -> ModuleType:
+    """The driver module (its ``integrate`` has the bundled driver's signature) compiled
+    for the model that ``adapter`` (a module's source) describes.
+
+    Raises
+    ------
+    ParameterError
+        The cache folder cannot be written.
+    """
+    key = instance_key(adapter, dependencies)
+    package = f"camdyn_model_{key}"
+    with _LOCK:
+        if package in _LOADED:
+            return _LOADED[package]
+        root = cache_root()
+        folder = root / package
+        if not (folder / "driver.py").exists():
+            try:
+                _write_package(folder, package, adapter)
+            except OSError as exc:
+                raise ParameterError(f"cannot write the model's compiled driver into {root}: {exc.strerror or exc}; "
+                                     "set CAMDYN_CACHE_DIR to a writable folder") from None
+        if str(root) not in sys.path:
+            sys.path.append(str(root))
+        driver = importlib.import_module(f"{package}.driver")
+        _LOADED[package] = driver
+        return driver
