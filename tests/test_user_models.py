@@ -1,0 +1,197 @@
+"""A model written outside the package (examples/models/valve_train.py) through the model
+protocol: its own compiled driver, checked against an independent SciPy solution of its
+equations written here, cached across processes, and refused clearly when ill-formed."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numba
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import camdyn
+from camdyn.errors import ParameterError, UnitError
+from camdyn.systems.protocol import Model, adapter_source
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "models" / "valve_train.py"
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    """A fresh cache folder for the generated drivers, for this module's tests."""
+    folder = tmp_path_factory.mktemp("camdyn-cache")
+    old = os.environ.get("CAMDYN_CACHE_DIR")
+    os.environ["CAMDYN_CACHE_DIR"] = str(folder)
+    yield folder
+    if old is None:
+        del os.environ["CAMDYN_CACHE_DIR"]
+    else:
+        os.environ["CAMDYN_CACHE_DIR"] = old
+
+
+@pytest.fixture(scope="module")
+def valve(cache):
+    sys.path.insert(0, str(EXAMPLE.parent))
+    try:
+        spec = importlib.util.spec_from_file_location("valve_train", EXAMPLE)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules["valve_train"] = module
+        spec.loader.exec_module(module)
+        yield module
+    finally:
+        sys.path.remove(str(EXAMPLE.parent))
+
+
+# --- the valve train again, in plain Python and SciPy (independent of the example's code)
+
+def _lift(t, q):
+    """Cam lift [m] and its rate [m/s]: h sin^4(pi phi / beta) on the window."""
+    omega = 2 * math.pi * q["speed"]
+    phi = (omega * t) % (2 * math.pi) - q["cam.opening_angle"]
+    if not 0.0 < phi < q["cam.window"]:
+        return 0.0, 0.0
+    x = math.pi * phi / q["cam.window"]
+    return q["cam.lift"] * math.sin(x) ** 4, q["cam.lift"] * 4 * math.sin(x) ** 3 * math.cos(x) * math.pi / q[
+        "cam.window"] * omega
+
+
+def _scipy_valve_train(q, y0, t_eval):
+    """Integrate mode by mode with terminal, directional events at the two penetrations."""
+    def field(cam, seat):
+        def f(t, y):
+            s, sd = _lift(t, q)
+            fc = max(0.0, q["contact.stiffness"] * (s - q["lash"] - y[0])
+                     * (1 + q["contact.damping"] * (sd - y[1]))) if cam else 0.0
+            fs = max(0.0, q["seat.stiffness"] * -y[0] * (1 - q["seat.damping"] * y[1])) if seat else 0.0
+            f2 = q["spring.preload"] + q["spring.retainer_stiffness"] * (y[0] - y[2]) + q["spring.damping"] * (
+                y[1] - y[3])
+            f1 = q["spring.preload"] + q["spring.head_stiffness"] * y[2] + q["spring.damping"] * y[3]
+            return [y[1], (fc + fs - f2) / q["valve.mass"], y[3], (f2 - f1) / q["spring.mass"]]
+        return f
+
+    def cam_gap(t, y):
+        return _lift(t, q)[0] - q["lash"] - y[0]
+
+    def seat_gap(t, y):
+        return -y[0]
+
+    cam = cam_gap(0.0, y0) > 0
+    seat = y0[0] < 0
+    t, y = 0.0, np.array(y0, float)
+    out = np.full((len(t_eval), 4), np.nan)
+    events = 0
+    while t < t_eval[-1]:
+        cam_gap.terminal = seat_gap.terminal = True
+        cam_gap.direction = -1.0 if cam else 1.0
+        seat_gap.direction = -1.0 if seat else 1.0
+        sol = solve_ivp(field(cam, seat), (t, t_eval[-1]), y, method="DOP853", rtol=1e-12, atol=1e-16,
+                        events=[cam_gap, seat_gap], dense_output=True, max_step=1e-4)
+        inside = (t_eval >= t) & (t_eval <= sol.t[-1])
+        if inside.any():
+            out[inside] = sol.sol(t_eval[inside]).T
+        if sol.status != 1:
+            break
+        which = 0 if sol.t_events[0].size else 1
+        t, y = sol.t_events[which][0], sol.y_events[which][0]
+        if which == 0:
+            cam = not cam
+        else:
+            seat = not seat
+        events += 1
+    return out, events
+
+
+def test_valve_train_agrees_with_scipy(valve):
+    bound = valve.VALVE_TRAIN.bind({"speed": "2400 rpm"})   # 40 Hz
+    ds = camdyn.simulate(bound, revolutions=2, sample_rate=4000.0, rtol=1e-11, atol=1e-14)
+    q = dict(zip(bound.model.parameter_names, bound.values))
+    assert q["speed"] == pytest.approx(40.0)
+    reference, events = _scipy_valve_train(q, bound.initial_state(), ds["time"].values)
+    amplitude = np.max(np.abs(reference[:, 0]))
+    error = np.max(np.abs(ds["x_v"].values - reference[:, 0])) / amplitude
+    # measured: 3.3e-12 of the lift with 36 events (the valve bounces on its seat 7 times
+    # after each landing) in both solutions
+    assert error < 1e-7
+    assert ds.sizes["event"] == events
+    assert ds["x_v"].attrs["units"] == "m" and ds["cam_force"].attrs["units"] == "N"
+    # a deliberate mistake must show: the SciPy model with a 1 % softer seat is far off
+    wrong = dict(q, **{"seat.stiffness": 0.99 * q["seat.stiffness"]})
+    other, _ = _scipy_valve_train(wrong, bound.initial_state(), ds["time"].values)
+    assert np.max(np.abs(ds["x_v"].values - other[:, 0])) / amplitude > 1e-4   # measured 2.2e-4
+
+
+def test_second_process_loads_the_driver_without_compiling(valve, cache):
+    camdyn.simulate(valve.VALVE_TRAIN.bind(), revolutions=1)   # compiled (or loaded) here
+    script = textwrap.dedent(f"""
+        import sys
+        sys.path.insert(0, {str(EXAMPLE.parent)!r})
+        import camdyn, valve_train
+        from camdyn.simulation.models import model_driver
+        ds = camdyn.simulate(valve_train.VALVE_TRAIN.bind(), revolutions=1)
+        stats = model_driver(valve_train.VALVE_TRAIN).integrate.stats
+        print(sum(stats.cache_hits.values()), sum(stats.cache_misses.values()))
+    """)
+    env = dict(os.environ, CAMDYN_CACHE_DIR=str(cache))
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=600)
+    assert run.returncode == 0, run.stderr
+    hits, misses = map(int, run.stdout.split()[-2:])
+    assert (hits, misses) == (1, 0)
+
+
+def test_parameters_with_units_and_refusals(valve):
+    model = valve.VALVE_TRAIN
+    bound = model.bind({"lash": "0.3 mm", "spring.preload": 300})
+    assert bound["lash"] == pytest.approx(3e-4)
+    assert bound["spring.preload"] == 300.0
+    with pytest.raises(ParameterError, match="has no parameter 'lashes'"):
+        model.bind({"lashes": 1e-4})
+    with pytest.raises(UnitError):
+        model.bind({"lash": "3 kg"})
+    with pytest.raises(ParameterError, match="must be finite"):
+        model.bind({"lash": float("nan")})
+    with pytest.raises(ParameterError, match="initial_state must be 4 finite numbers"):
+        camdyn.simulate(bound, revolutions=1, initial_state=[0.0, 0.0])
+    with pytest.raises(ParameterError, match="max_step"):
+        camdyn.simulate(bound, revolutions=1, max_step=float("nan"))
+    with pytest.raises(ParameterError, match="max_steps"):
+        camdyn.simulate(bound, revolutions=1, max_steps=2 ** 70)
+
+
+@numba.njit
+def _rhs(t, y, mode, p, dydt):   # pragma: no cover - only its description is checked
+    dydt[0] = 0.0
+
+
+def test_ill_formed_models_are_refused():
+    good = {"rhs": _rhs, "guards": _rhs, "expected_sign": _rhs, "transition": _rhs, "initial_mode": _rhs}
+    with pytest.raises(ParameterError, match=r"functions missing \['initial_mode'\]"):
+        Model("m", ["x"], [], [], ["m"], {k: v for k, v in good.items() if k != "initial_mode"})
+    with pytest.raises(ParameterError, match="must be compiled with @numba.njit"):
+        Model("m", ["x"], [], [], ["m"], dict(good, rhs=lambda t, y, mode, p, dydt: None))
+    with pytest.raises(ParameterError, match="speed parameter 'f'"):
+        Model("m", ["x"], [("k", "N/m")], [], ["m"], good, speed="f")
+    with pytest.raises(ParameterError, match="repeat the names"):
+        Model("m", ["x", "x"], [], [], ["m"], good)
+
+    @numba.njit
+    def local(t, y, mode, p, dydt):   # pragma: no cover
+        dydt[0] = 0.0
+
+    with pytest.raises(ParameterError, match="top level of a module"):
+        Model("m", ["x"], [], [], ["m"], dict(good, rhs=local))
+
+
+def test_adapter_calls_the_models_functions(valve):
+    source = adapter_source(valve.VALVE_TRAIN)
+    assert "from valve_train import rhs as _rhs" in source
+    assert "def state_size(system):\n    return 4" in source
+    assert "def guard_count(system):\n    return 2" in source
