@@ -45,8 +45,8 @@ MODEL_MODULES = ("nordsieck", "steppers", "sampling", "crossings", "events", "mu
 _HERE = Path(__file__).resolve().parent
 _REGISTRY_IMPORT = "from camdyn.systems import registry as systems"
 #: An import left pointing at the registry or at a bundled model-calling module.
-_STALE_IMPORT = re.compile(r"^\s*(?:from|import)\s+camdyn\.(?:systems|integrator\.(?:%s))\b" % "|".join(MODEL_MODULES),
-                           re.MULTILINE)
+_STALE_IMPORT = re.compile(r"^\s*(?:from|import)\s+camdyn\.(?:systems|integrator\.(?:"
+                           + "|".join(MODEL_MODULES) + r"))\b", re.MULTILINE)
 _LOCK = threading.Lock()
 _LOADED: dict[str, ModuleType] = {}
 
