@@ -535,6 +535,10 @@ def radau_solve(rhs, jac, t0, y0, t_end, rtol, atol, first_step, max_steps, t_ou
         if 0.1 * abs(h) <= abs(t) * EPS or h <= 0.0:
             status = STATUS_STEP_UNDERFLOW
             break
+        if not last and t + h >= t_end:   # a retried step reaching the end (RADAU5 checks after acceptances only)
+            h = t_end - t
+            last = True
+            need_lu = True
         if need_jacobian:
             jac(t, y, p, jacobian)
             counters[RADAU_JACOBIANS] += 1
@@ -583,6 +587,9 @@ def radau_solve(rhs, jac, t0, y0, t_end, rtol, atol, first_step, max_steps, t_ou
             error_accepted = max(1e-2, error)
             t_old = t
             t = t_end if last else t + h
+            if t_end - t <= 16.0 * EPS * max(1.0, abs(t_end)):
+                t = t_end   # landed on the end up to rounding: no step of a few ulp after it
+                last = True
             h_old = h
             radau_dense_coefficients(y, z, coefficients)
             have_polynomial = True
