@@ -8,13 +8,16 @@ Output files and JSON documents are in :mod:`camdyn.cli.outputs`.
 from __future__ import annotations
 
 import contextlib
+import importlib
+import os
 import sys
+from collections.abc import Iterable
 
 import numpy as np
 import typer
 from rich.console import Console
 
-from camdyn.errors import ParameterError
+from camdyn.errors import OutputError, ParameterError
 from camdyn.io.system_config import load_system
 from camdyn.params.config import parse_assignments
 from camdyn.params.units import parse_quantity, parse_speed
@@ -38,6 +41,53 @@ _notice = {"shown": False}
 def load_source(source: str, assignments):
     """The system of a preset name or TOML file, with ``--set`` assignments applied."""
     return load_system(source, parse_assignments(assignments))
+
+
+def command_inputs() -> list[str]:
+    """The files the running command reads: the values of its positional arguments (a
+    preset name or TOML file, records, a sweep spec) that name existing files. Empty
+    outside a command."""
+    ctx = None
+    for module in ("typer._click.globals", "click"):   # typer's own copy of click, or click
+        with contextlib.suppress(ImportError, AttributeError):
+            ctx = importlib.import_module(module).get_current_context(silent=True)
+        if ctx is not None:
+            break
+    if ctx is None:
+        return []
+    found = []
+    for param in ctx.command.params:
+        if getattr(param, "param_type_name", None) != "argument":
+            continue
+        value = ctx.params.get(param.name)
+        for item in value if isinstance(value, (list, tuple)) else [value]:
+            if isinstance(item, (str, os.PathLike)) and os.path.isfile(item):
+                found.append(os.fspath(item))
+    return found
+
+
+def refuse_inputs_as_outputs(outputs: Iterable, inputs: Iterable | None = None) -> None:
+    """Refuse an output that is one of the command's inputs (the same file, by any name:
+    a link, ``./``, ``..``), with or without ``--force``: writing it would replace the
+    file the command reads. ``inputs`` defaults to :func:`command_inputs`.
+
+    Raises
+    ------
+    OutputError
+        Naming the output and the input.
+    """
+    inputs = command_inputs() if inputs is None else [os.fspath(p) for p in inputs]
+    for out in outputs:
+        if out is None or not os.path.exists(out):
+            continue
+        for source in inputs:
+            try:
+                same = os.path.samefile(out, source)
+            except OSError:
+                same = False
+            if same:
+                raise OutputError(f"cannot write {out}: it is the input {source} of this command "
+                                  f"(--force does not change that); choose another output name")
 
 
 def parse_grid(text: str, what: str, unit: str | None = None) -> np.ndarray:

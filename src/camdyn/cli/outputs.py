@@ -6,7 +6,10 @@ Rules every command follows:
 * an output goes where the user says, or to the working directory;
 * its format follows its suffix, or it is refused: a result ``.nc`` (netCDF), a figure
   any image format matplotlib writes, a record ``.csv``, ``.nc`` or ``.uff``;
-* an existing file is not overwritten without ``--force``;
+* an existing file is not overwritten without ``--force``, and neither is one that
+  another process creates while the command runs (the file is published by an exclusive
+  link: :func:`camdyn.io.atomic.expect_new`);
+* an output that is one of the command's inputs is refused, even with ``--force``;
 * every written file is announced as ``wrote PATH (SIZE)``: on standard output, or on
   standard error with ``--json`` so that standard output stays one JSON document.
 """
@@ -21,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import typer
 
-from camdyn.cli.common import console, err_console
+from camdyn.cli.common import console, err_console, refuse_inputs_as_outputs
 from camdyn.errors import OutputError
 
 #: Suffixes of a netCDF result file.
@@ -45,8 +48,11 @@ def check_outputs(netcdf: Path | None = None, figure: Path | None = None, record
     ``.nc``, a figure (``figure``, ``figures``) in an image format matplotlib writes, a
     record in a record format (``.csv``, ``.nc``, ``.uff``); ``json_file`` and ``others``
     have no suffix rule. ``expected_bytes`` [B] also refuses a netCDF result larger than
-    the free space of its disk."""
-    from camdyn.io.atomic import check_writable
+    the free space of its disk. An output that is one of the command's inputs (its
+    positional arguments) is refused even with ``force``; without ``force``, each output
+    is registered with :func:`camdyn.io.atomic.expect_new`, so that a file of that name
+    created by another process during the work is not replaced either."""
+    from camdyn.io.atomic import check_writable, expect_new
 
     checks = []
     if netcdf is not None:
@@ -66,9 +72,12 @@ def check_outputs(netcdf: Path | None = None, figure: Path | None = None, record
             raise OutputError(f"cannot write {record}: a record is .csv, .nc/.h5 or .uff/.unv")
         checks.append((Path(record), None))
     checks += [(Path(p), None) for p in [json_file, *others] if p is not None]
+    refuse_inputs_as_outputs(path for path, _ in checks)
     for path, size in checks:
         _refuse_existing(path, force)
         check_writable(path, size)
+    for path, _ in checks:
+        expect_new(path, not force)
 
 
 def human_size(n: int) -> str:

@@ -334,7 +334,9 @@ def _write_record(ds: xr.Dataset, names: list[str], suffix: str, path: Path) -> 
     elif suffix in (".nc", ".h5", ".hdf5", ".nc4"):
         out = ds[names].copy()
         out.attrs = {k: v for k, v in ds.attrs.items() if isinstance(v, (int, float, str))}
-        out.to_netcdf(path, engine="h5netcdf")
+        from camdyn.io.netcdf import write_netcdf
+
+        write_netcdf(out, path)   # built in memory: a full disk cannot crash HDF5
     elif suffix in (".uff", ".unv"):
         import pyuff
 

@@ -14,11 +14,14 @@ the whole sweep. The parts are removed once the result is complete.
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import fcntl
 import hashlib
 import json
 import os
 import shutil
+import stat
 import zipfile
 from pathlib import Path
 
@@ -27,7 +30,7 @@ import h5py
 import numpy as np
 
 from camdyn import __version__
-from camdyn.errors import ParameterError
+from camdyn.errors import OutputError, ParameterError
 from camdyn.io.atomic import atomic_output, write_text
 from camdyn.sweeps import metrics as M
 from camdyn.sweeps.spec import METRICS, SweepSpec
@@ -72,31 +75,36 @@ class Checkpoint:
         self.folder = Path(str(spec.output) + ".parts")
         self.digest = spec.digest()
         self._verified: set[int] = set()   # chunks this process wrote or has checked
-        self._lock = _lock(Path(str(spec.output) + ".lock"))
-        manifest = self.folder / "manifest.json"
-        if self.folder.exists() and restart:
-            shutil.rmtree(self.folder)
-        if manifest.exists():
-            try:
-                old = json.loads(manifest.read_text()).get("digest")
-            except (OSError, ValueError):
-                old = None
-            if old != self.digest:
-                raise ParameterError(f"{self.folder} holds checkpoints of a different sweep (digest {old}, this "
-                                     f"spec {self.digest}); rerun with --restart to discard them")
-        else:
-            foreign = [p.name for p in self.folder.glob("chunk_*.npz") if self._part_digest(p) != self.digest]
-            if foreign:
-                raise ParameterError(f"{self.folder} holds {len(foreign)} checkpoint(s) that are not of this sweep "
-                                     f"(for example {foreign[0]}); rerun with --restart to discard them")
-            self.folder.mkdir(parents=True, exist_ok=True)
-            write_text(manifest, json.dumps({"digest": self.digest, "chunks": spec.chunks,
-                                             "points": spec.points, "camdyn": __version__}))
+        self._lock_path = Path(str(spec.output) + ".lock")
+        self._lock = _lock(self._lock_path)
+        try:
+            manifest = self.folder / "manifest.json"
+            if self.folder.exists() and restart:
+                shutil.rmtree(self.folder)
+            if manifest.exists():
+                try:
+                    old = json.loads(manifest.read_text()).get("digest")
+                except (OSError, ValueError):
+                    old = None
+                if old != self.digest:
+                    raise ParameterError(f"{self.folder} holds checkpoints of a different sweep (digest {old}, this "
+                                         f"spec {self.digest}); rerun with --restart to discard them")
+            else:
+                foreign = [p.name for p in self.folder.glob("chunk_*.npz") if self._part_digest(p) != self.digest]
+                if foreign:
+                    raise ParameterError(f"{self.folder} holds {len(foreign)} checkpoint(s) that are not of this sweep "
+                                         f"(for example {foreign[0]}); rerun with --restart to discard them")
+                self.folder.mkdir(parents=True, exist_ok=True)
+                write_text(manifest, json.dumps({"digest": self.digest, "chunks": spec.chunks,
+                                                 "points": spec.points, "camdyn": __version__}))
+        except BaseException:   # refused (another spec), or the disk is full: no lock left behind
+            self.close()
+            raise
 
     def close(self) -> None:
         """Release the output's lock (also released when the process ends, however it ends)."""
         if self._lock is not None:
-            Path(self._lock.name).unlink(missing_ok=True)
+            self._lock_path.unlink(missing_ok=True)
             self._lock.close()
             self._lock = None
 
@@ -241,22 +249,49 @@ def _checksum(arrays: dict) -> str:
 
 def _lock(path: Path):
     """Hold an exclusive lock on ``path`` (a lock file beside the output) for the sweep;
-    the operating system releases it when the process ends, even by SIGKILL."""
+    the operating system releases it when the process ends, even by SIGKILL.
+
+    The lock file is opened with ``O_NOFOLLOW`` and must be a plain file with one link:
+    a symbolic link planted at its name is removed (never followed) and the lock file
+    created in its place; a hard link or anything else there is refused, so the process
+    id written into the lock never lands in another file."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    handle = path.open("a+")
-    try:
-        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
+    for _ in range(5):
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o600)
+        except OSError as exc:
+            if exc.errno == errno.ELOOP:       # a symbolic link at the lock's name: remove the link only
+                with contextlib.suppress(FileNotFoundError):
+                    os.unlink(path)
+                continue
+            raise OutputError(f"cannot create the lock file {path}: {exc.strerror or exc}") from None
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode) or st.st_nlink != 1:
+            os.close(fd)
+            raise OutputError(f"{path} is not a lock file camdyn made (a link or a special file); remove it and "
+                              f"run again")
+        handle = os.fdopen(fd, "a+")
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            handle.seek(0)
+            owner = handle.read(100).strip() or "another process"
+            handle.close()
+            raise ParameterError(f"another sweep ({owner}) is writing {path.with_suffix('')}; wait for it to "
+                                 f"finish or choose another output") from None
+        try:
+            same = os.path.samestat(os.fstat(handle.fileno()), os.stat(path, follow_symlinks=False))
+        except OSError:
+            same = False
+        if not same:   # the holder removed it as we locked it: lock the file now under that name
+            handle.close()
+            continue
         handle.seek(0)
-        owner = handle.read().strip() or "another process"
-        handle.close()
-        raise ParameterError(f"another sweep ({owner}) is writing {path.with_suffix('')}; wait for it to finish "
-                             f"or choose another output") from None
-    handle.seek(0)
-    handle.truncate()
-    handle.write(f"pid {os.getpid()}")
-    handle.flush()
-    return handle
+        handle.truncate()
+        handle.write(f"pid {os.getpid()}")
+        handle.flush()
+        return handle
+    raise OutputError(f"cannot lock {path}: it keeps being replaced (a link planted there?)")
 
 
 def _coordinates(f, spec: SweepSpec) -> None:
