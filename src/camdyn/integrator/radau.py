@@ -62,7 +62,7 @@ __all__ = [
 ]
 
 # ---------------------------------------------------------------------------------------
-# Coefficients ([1], IV.5, Table 5.6: Radau IIA of order 5).
+# Coefficients ([1], IV.5: the Radau IIA method of order 5, s = 3).
 _S6 = math.sqrt(6.0)
 RADAU_C = np.array([(4.0 - _S6) / 10.0, (4.0 + _S6) / 10.0, 1.0])
 RADAU_A = np.array([
