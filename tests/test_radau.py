@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from camdyn.integrator.counters import STATUS_OK
+from camdyn.integrator.counters import STATUS_MAX_STEPS, STATUS_OK
 from camdyn.integrator.radau import (
     RADAU_A,
     RADAU_ACCEPTED,
@@ -413,6 +413,47 @@ def test_a_wrong_jacobian_costs_iterations_not_accuracy():
         steps = counters[RADAU_ACCEPTED] + counters[RADAU_REJECTED]
         results.append((error, counters[RADAU_NEWTON] / steps, counters))
     assert results[1][1] > 2.0 * results[0][1], results
+
+
+def test_outputs_counters_and_per_component_tolerances():
+    """``t_out`` at ``t0`` returns ``y0`` as given; a run stopped by ``max_steps`` says so
+    and leaves the outputs past the stop NaN; an ``atol`` per component
+    (:mod:`camdyn.integrator.tolerances`) equal to the scalar one gives the same step,
+    and an infinite one takes its component out of the error norm."""
+    p = params(ROBERTSON)
+    y0 = np.array([1.0, 0.0, 0.0])
+    y_out, counters = radau_solve(rhs, jac, 0.0, y0, 1e5, 1e-6, 1e-10, 0.0, 50, np.array([0.0, 1e5]), p)
+    assert np.array_equal(y_out[0], y0)
+    assert counters[RADAU_STATUS] == STATUS_MAX_STEPS
+    assert counters[RADAU_ACCEPTED] + counters[RADAU_REJECTED] == 50
+    assert np.all(np.isnan(y_out[1]))
+    y = np.array([0.5, 1e-5, 0.5])
+    scalar = _estimate_with_atol(p, y, 1e-10)
+    per_component = _estimate_with_atol(p, y, np.full(3, 1e-10))
+    assert per_component[0] == scalar[0]
+    assert np.array_equal(per_component[1], scalar[1]) and np.array_equal(per_component[2], scalar[2])
+    only_first = _estimate_with_atol(p, y, np.array([1e-10, np.inf, np.inf]))
+    # (the Newton iteration's norm changes too, so the estimate is this run's own)
+    scale = 1e-10 + 1e-6 * max(y[0], abs(only_first[1][0]))
+    assert only_first[0] == pytest.approx(abs(only_first[2][0]) / scale / math.sqrt(3), rel=1e-12)
+    assert only_first[0] < 1e-3 * scalar[0]   # measured 0.84 against 4550: y2 (1e-5) dominated it
+
+
+def _estimate_with_atol(p, y0, atol):
+    """(error norm, y1, err) of one step of 1e-3 s from ``(0, y0)`` with ``atol``."""
+    n = y0.shape[0]
+    f0, y1, err = np.empty(n), np.empty(n), np.empty(n)
+    jacobian = np.zeros((n, n))
+    lu_r, lu_c = np.empty((n, n)), np.empty((n, n), complex)
+    piv_r, piv_c = np.empty(n, np.int64), np.empty(n, np.int64)
+    rhs(0.0, y0, p, f0)
+    jac(0.0, y0, p, jacobian)
+    radau_factor(jacobian, 1e-3, lu_r, piv_r, lu_c, piv_c)
+    z, w, work, cwork = np.zeros((3, n)), np.empty((3, n)), np.empty((6, n)), np.empty((2, n), complex)
+    result = radau_step(rhs, 0.0, y0, f0, 1e-3, p, 1e-6, atol, n, 1e-3, 1.0, False,
+                        lu_r, piv_r, lu_c, piv_c, z, w, y1, err, work, cwork)
+    assert result[0] == STEP_CONVERGED
+    return result[1], y1.copy(), err.copy()
 
 
 def test_solve_runs_quickly_once_compiled():
