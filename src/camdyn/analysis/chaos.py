@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from camdyn.analysis.lyapunov import check_periods
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.integrator import driver
 from camdyn.params.system import System
@@ -135,6 +136,7 @@ def lyapunov_exponent(system: System, speed: float | None = None, revolutions: i
         if not (isinstance(value, int) and value >= (1 if name == "revolutions" else 0)):
             raise ParameterError(f"{name} must be a whole number >= {1 if name == 'revolutions' else 0}, "
                                  f"got {value!r}")
+    check_periods(revolutions, transient, 1)
     if not (0 < separation < 1e-3):
         raise ParameterError(f"separation must lie in (0, 1e-3) rad, got {separation!r}")
     period = system.motion.period

@@ -45,7 +45,7 @@ from camdyn.params.system import System
 from camdyn.simulation import limits
 from camdyn.systems import registry as systems
 
-__all__ = ["LyapunovSpectrum", "model_spectrum", "lyapunov_spectrum"]
+__all__ = ["LyapunovSpectrum", "model_spectrum", "lyapunov_spectrum", "check_periods", "MAX_PERIODS"]
 
 #: Accepted steps allowed per interval [-], and events logged per interval [-].
 MAX_STEPS = 50_000_000
@@ -120,6 +120,20 @@ def _count(name: str, value, low: int) -> int:
     return int(value)
 
 
+#: Most forcing periods (transient and averaged together) a Lyapunov spectrum may run
+#: [-]: one compiled call and a QR step each (about a millisecond), so 10^6 take hours;
+#: the running exponents settle within thousands.
+MAX_PERIODS = 10 ** 6
+
+
+def check_periods(periods: int, transient: int, exponents: int) -> None:
+    """Refuse, before any work, a spectrum of more than :data:`MAX_PERIODS` periods
+    (:func:`camdyn.simulation.limits.check_request`; each averaged period keeps its
+    ``exponents`` logarithms and running means, 8 B each)."""
+    limits.check_request(f"a Lyapunov spectrum of {transient} + {periods} periods", periods + transient,
+                         16 * max(int(exponents), 1), limit=MAX_PERIODS, unit="periods")
+
+
 def _checked(system_id, p, y0, period, weights, rtol, atol):
     """The inputs of :func:`model_spectrum` as arrays, or a ParameterError."""
     if isinstance(system_id, bool) or not isinstance(system_id, (int, np.integer)) or not (
@@ -179,6 +193,7 @@ def model_spectrum(system_id: int, p, y0, period: float, periods: int = 400, tra
     system_id, p, y0, period, weights = _checked(system_id, p, y0, period, weights, rtol, atol)
     periods = _count("periods", periods, 1)
     transient = _count("transient", transient, 0)
+    check_periods(periods, transient, np.size(weights))
     t_start = limits.check_number("t_start", t_start, "s")
     h_max, scan = limits.step_limits(period, system_id)
     h_max = h_max if max_step is None else limits.check_number("max_step", max_step, "s")
@@ -263,6 +278,7 @@ def lyapunov_spectrum(system: System, speed: float | None = None, revolutions: i
     system = with_speed(system, speed)
     revolutions = _count("revolutions", revolutions, 1)
     transient = _count("transient", transient, 0)
+    check_periods(revolutions, transient, 2)
     limits.check_tolerances(rtol, atol)
     period = system.motion.period
     if not (math.isfinite(period) and period > 0):

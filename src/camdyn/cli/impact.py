@@ -28,6 +28,17 @@ def _per_record(values: Optional[List[str]], count: int, what: str, parse) -> li
     return out
 
 
+def _check_distinct(paths: List[Path]) -> None:
+    """Refuse a record named twice (by the same or another path to the same file)."""
+    seen: dict = {}
+    for path in paths:
+        key = Path(path).resolve()
+        if key in seen:
+            raise ParameterError(f"the record {path} is given twice (as {seen[key]} before): each record must be "
+                                 f"a different operating point (a record given twice counts its impacts twice)")
+        seen[key] = path
+
+
 #: Headline keys of the impact-damping estimate (JSON ``summary``); the rest are details,
 #: with the per-impact table last.
 _IMPACT_SUMMARY = ("beta", "beta_units", "n", "mode", "residue", "residue_used", "impacts_used", "records",
@@ -59,11 +70,14 @@ def identify_impact_damping(
         json_out: bool = JsonOption):
     """Impact damping beta, n of Fn = K delta^1.5 + beta delta^n delta_dot (thesis 3.5)."""
     from camdyn.identification.impact_damping import (
+        check_bootstrap,
         estimate_impact_damping,
         residue_landscape,
     )
     from camdyn.io.measurements import read_measurement
 
+    check_bootstrap(bootstrap)
+    _check_distinct(data)
     targets = _impact_figures(plot_dir, fix_n is None)
     check_outputs(figures=targets, force=force)
     system = load_source(source, set_)

@@ -214,14 +214,15 @@ def design(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
            force: bool = ForceOption,
            json_out: bool = JsonOption):
     """Map the design criteria of the friction experiment and recommend an operating window (thesis 4.4)."""
-    from camdyn.tribology.design import design_map
+    from camdyn.tribology.design import check_design_size, design_map
 
     if plot is None and not json_out:
         plot = Path("design.png")
     check_outputs(netcdf=out, figure=plot, force=force)
     system = load_source(source, set_)
-    grid_r = parse_grid(ratios, "ratios")
-    grid_s = parse_grid(speeds, "speeds", "Hz")
+    grid_r = _design_grid(ratios, "ratios")
+    grid_s = _design_grid(speeds, "speeds", "Hz")
+    check_design_size(grid_r.size * grid_s.size)
     with Progress(TextColumn("design map"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
                   TimeRemainingColumn(), console=Console(stderr=True), transient=True,
                   disable=json_out) as bar:
@@ -242,6 +243,22 @@ def design(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     files = _write_design(ds, out, plot, json_out)
     if json_out:
         emit_json("design", summary, admissible_speeds_hz=window, files=files)
+
+
+def _design_grid(text: str, what: str, unit: str | None = None) -> np.ndarray:
+    """:func:`parse_grid` of a design axis, its COUNT refused before the grid is made
+    when it alone exceeds the design map's size (:func:`check_design_size`)."""
+    from camdyn.tribology.design import check_design_size
+
+    parts = text.split(":")
+    if len(parts) == 3:
+        try:
+            count = float(parts[2])
+        except ValueError:
+            count = None   # parse_grid says what is wrong
+        if count is not None:
+            check_design_size(count)
+    return parse_grid(text, what, unit)
 
 
 def _print_design(ds, window: dict, summary: dict) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 from typing import List, Optional
 
@@ -150,6 +151,17 @@ def _print_summary(out: dict):
 _DETAILS = ("last_impact", "solver")
 
 
+def _check_revolutions(revolutions: float) -> None:
+    """Refuse a run length that is not a positive, finite number of revolutions; warn
+    about one shorter than a revolution (legitimate, but its summary is per revolution)."""
+    if not (math.isfinite(revolutions) and revolutions > 0):
+        raise ParameterError(f"--revolutions must be a positive, finite number of cam revolutions, got {revolutions!r}")
+    if revolutions < 1:
+        warnings.warn(f"--revolutions {revolutions:g} is less than one cam revolution: the run shows part of one, "
+                      f"and the summary's per-revolution figures (impacts per revolution, harmonics) are not "
+                      f"computed from a whole revolution", UserWarning, stacklevel=2)
+
+
 def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              set_: Optional[List[str]] = SetOption,
              speed: Optional[str] = typer.Option(None, help="Cam speed, e.g. 11.55Hz or 693rpm."),
@@ -170,6 +182,7 @@ def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     on a driven shaft, the follower on a flexible pivot, or two followers on one cam
     (docs/mechanisms.md)."""
     from camdyn.simulation.runner import simulate as run
+    _check_revolutions(revolutions)
     check_outputs(netcdf=out, figure=plot, force=force)
     if is_mechanism(source):
         from camdyn.cli.mechanism import simulate_mechanism_command

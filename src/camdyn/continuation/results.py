@@ -15,6 +15,7 @@ from camdyn.continuation.orbits import Orbit, find_orbit, shoot
 from camdyn.continuation.problem import Problem, system_problem
 from camdyn.continuation.switching import switch_branch
 from camdyn.errors import CamdynError, ParameterError
+from camdyn.model.equilibrium import as_system
 from camdyn.params.system import System
 
 #: The first period-``2k`` orbit's distance from a period doubling (scaled,
@@ -25,8 +26,8 @@ from camdyn.params.system import System
 #: parameter's column by its central difference), and converged at 1e-2 [-].
 AUTONOMOUS_AMPLITUDE = 1e-2
 
-__all__ = ["check_trace_settings", "trace_branch", "switch_doublings", "orbit_record", "branch_records",
-           "bifurcation_records", "branches_dataset"]
+__all__ = ["check_trace_settings", "parameter_value", "trace_branch", "switch_doublings", "orbit_record",
+           "branch_records", "bifurcation_records", "branches_dataset"]
 
 
 def check_trace_settings(start: float, stop: float, periods, segments, transient, max_points, step: float,
@@ -45,11 +46,30 @@ def check_trace_settings(start: float, stop: float, periods, segments, transient
         raise ParameterError(f"transient must be at least 1, max_points at least 2 and step at least {MIN_STEP:g}")
 
 
+def parameter_value(key: str, value, name: str = "value") -> float:
+    """A value of the system parameter ``key`` [SI]: a number as it is, or text with a
+    unit as a configuration file or ``--set`` reads it (``"5 Hz"``, ``"693 rpm"``,
+    ``"1.2 mm"``); ``name`` names it in the messages."""
+    if isinstance(value, str):
+        from camdyn.params.config import SCHEMA, convert_value, unknown_key_error
+
+        if key not in SCHEMA:
+            raise unknown_key_error(key)
+        converted = convert_value(key, value, {})
+        if isinstance(converted, bool) or not isinstance(converted, (int, float)):
+            raise ParameterError(f"{key} is not a numeric parameter: it cannot be continued")
+        return float(converted)
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ParameterError(f"{name} must be a number [SI] or text with a unit, got {value!r}")
+    return float(value)
+
+
 def trace_branch(system: System, key: str, start: float, stop: float, periods: int = 1, step: float = 0.02,
                  max_points: int = 200, transient: int = 50, rtol: float = 1e-10,
                  progress: Callable[[Orbit], None] | None = None, segments: int = 1) -> tuple[Problem, Branch]:
-    """The branch of period-``periods`` orbits of ``system`` from the parameter ``key``
-    [SI unit] at ``start`` towards ``stop``: the orbit at ``start`` from a transient of
+    """The branch of period-``periods`` orbits of ``system`` (or the preset it names)
+    from the parameter ``key`` [SI unit, or text with a unit such as ``"5 Hz"``] at
+    ``start`` towards ``stop``: the orbit at ``start`` from a transient of
     ``transient`` forcing periods and Newton's method, then pseudo-arclength continuation
     (:func:`~camdyn.continuation.branches.continue_orbits`, steps in scaled units), by
     multiple shooting over ``segments`` segments when more than 1.
@@ -61,6 +81,8 @@ def trace_branch(system: System, key: str, start: float, stop: float, periods: i
     SimulationError
         If no orbit is found at ``start``.
     """
+    system = as_system(system)
+    start, stop = (parameter_value(key, value, name) for value, name in ((start, "start"), (stop, "stop")))
     check_trace_settings(start, stop, periods, segments, transient, max_points, step, "forcing periods")
     problem = system_problem(system.with_values(**{key: start}), key, rtol=rtol, atol=rtol * 1e-2)
     problem.build(stop)                                       # refuse an end value the system cannot take

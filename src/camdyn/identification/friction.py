@@ -36,9 +36,16 @@ from camdyn.analysis.harmonics import (
 from camdyn.analysis.kinematics import check_regime, inverse_kinematics
 from camdyn.errors import IdentificationError, ParameterError
 from camdyn.model import layout as L
+from camdyn.model.equilibrium import as_system
 from camdyn.model.outputs import contact_forces_from_reaction
 from camdyn.params.system import System
-from camdyn.records.schema import angular_acceleration, check_consistency, check_record
+from camdyn.records.schema import (
+    angular_acceleration,
+    check_consistency,
+    check_record,
+    record_speed,
+    require_record,
+)
 
 __all__ = ["FrictionEstimate", "estimate_friction"]
 
@@ -394,9 +401,10 @@ def estimate_friction(system: System, record: xr.Dataset, speed: float | None = 
     record : xarray.Dataset
         ``Nx``, ``Ny`` [N] and ``alpha_ddot`` [rad/s^2] (or ``a_t`` [m/s^2]) over
         ``time`` [s] (see :mod:`camdyn.io.measurements`). Their DC parts are ignored.
-    speed : float, optional
-        Cam speed [Hz]; default the record's ``speed_hz`` attribute, else estimated from
-        the acceleration's spectrum.
+    speed : float or str, optional
+        Cam speed [Hz], or text with a unit as :func:`camdyn.simulate` reads it
+        (``"11.55 Hz"``, ``"693 rpm"``); default the record's ``speed_hz`` attribute, else
+        estimated from the acceleration's spectrum.
     harmonics : int
         Cam harmonics of each signal kept in the force balance (1: the thesis's method).
     enforce : bool
@@ -405,10 +413,16 @@ def estimate_friction(system: System, record: xr.Dataset, speed: float | None = 
 
     Raises
     ------
+    ParameterError
+        ``system`` is not a System (or preset name), ``record`` not a Dataset (a file
+        name is refused with the call that reads it), or ``speed`` not a positive speed.
     IdentificationError
         The record loses contact, has a reversing sliding velocity, is not periodic at
         the cam speed, or is shorter than three revolutions.
     """
+    system = as_system(system)
+    record = require_record(record)
+    speed = record_speed(speed)
     if system.motion.kind != "constant":
         raise ParameterError("the friction estimator needs constant cam motion")
     if not (isinstance(harmonics, int) and harmonics >= 1):

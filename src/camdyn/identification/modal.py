@@ -18,7 +18,7 @@ import numpy as np
 import xarray as xr
 
 from camdyn.errors import IdentificationError, ParameterError
-from camdyn.records.schema import check_record, make_record
+from camdyn.records.schema import check_noise, check_record, check_seed, make_record
 
 __all__ = ["ModalDamping", "accelerance", "half_power_damping", "synthesize_impulse_test", "MIN_LINES"]
 
@@ -100,8 +100,14 @@ def half_power_damping(frequency: np.ndarray, response: np.ndarray,
         If the band holds no clear peak, the half-power points fall outside the data,
         or the half-power band holds fewer than :data:`MIN_LINES` lines.
     """
-    freq = np.asarray(frequency, float)
-    mag = np.abs(np.asarray(response))
+    try:
+        freq = np.asarray(frequency, float)
+        mag = np.abs(np.asarray(response, complex))
+    except (TypeError, ValueError):
+        raise ParameterError("frequency [Hz] and response must be arrays of numbers") from None
+    if freq.ndim != 1 or mag.shape != freq.shape or freq.size < 3:
+        raise ParameterError(f"frequency [Hz] and response must be 1-D arrays of the same length, at least 3 "
+                             f"spectral lines; got shapes {freq.shape} and {mag.shape}")
     lo, hi = band if band is not None else (freq[1], freq[-1])
     if not (0 <= lo < hi):
         raise ParameterError(f"the search band must be increasing frequencies, got {band!r}")
@@ -183,6 +189,13 @@ def synthesize_impulse_test(masses=(0.21, 0.05), stiffnesses=(8.0e6, 6.0e6), dam
                     ("sample_rate", sample_rate), ("pulse", pulse)):
         if not (math.isfinite(v) and v > 0):
             raise ParameterError(f"{name} must be positive, got {v!r}")
+    check_noise(noise)
+    check_seed(seed)
+    from camdyn.simulation import limits  # here: reading a hammer test needs no integrator
+
+    # t, the force, the response, lsim's four states and its temporaries: about 12 doubles a sample
+    limits.check_request(f"an impulse test of {duration:g} s at {sample_rate:g} Hz", duration * sample_rate, 96,
+                         unit="samples")
     mass = np.diag([m1, m2])
     stiff = np.array([[k1 + k2, -k2], [-k2, k2]])
     w2, phi = eigh(stiff, mass)                     # mass-normalised: phi^T M phi = I

@@ -51,13 +51,14 @@ too few samples.
 
 from __future__ import annotations
 
+import os
 import warnings
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from camdyn.errors import DataError
+from camdyn.errors import DataError, ParameterError
 from camdyn.io.atomic import atomic_output
 from camdyn.io.content import KIND_NAMES, file_kind, one_line, read_head
 from camdyn.io.csv_records import read_csv_record
@@ -265,7 +266,12 @@ def read_measurement(path: str | Path) -> xr.Dataset:
     ------
     DataError
         The file is missing, unreadable, in the wrong format, or its samples are unusable.
+    ParameterError
+        ``path`` is not a file name (text or a path).
     """
+    if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)):
+        raise ParameterError(f"read_measurement expects the record's file name (text or a pathlib.Path), got "
+                             f"{type(path).__name__} {path!r:.60}")
     path = Path(path)
     if path.is_dir():
         raise DataError(f"{path} is a folder, not a measurement file")

@@ -11,12 +11,13 @@ frequency comes from the eigenvalues of the Jacobian of the 2-state system at
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import brentq
 
-from camdyn.errors import GeometryError
+from camdyn.errors import GeometryError, ParameterError
 from camdyn.model import layout as L
 from camdyn.model.contact import contact_force
 from camdyn.model.dynamics import evaluate
@@ -108,7 +109,20 @@ def _moment(alpha: float, p: np.ndarray, contact: bool) -> float:
     return evaluate(0.0, alpha, 0.0, mode, p)[0] * p[L.INERTIA]
 
 
-def static_equilibrium(system: System, theta0: float | None = None) -> Equilibrium:
+def as_system(system) -> System:
+    """``system`` itself, or the system a preset name or TOML file (text or path) names
+    (:func:`camdyn.params.config.load_system`: a file with a ``[profile]`` table needs
+    :func:`camdyn.load_system`); anything else is refused with a :class:`ParameterError`."""
+    if isinstance(system, System):
+        return system
+    if isinstance(system, (str, os.PathLike)):
+        from camdyn.params.config import load_system
+        return load_system(system)
+    raise ParameterError(f"expected a System (from camdyn.load_system) or a preset name, got "
+                         f"{type(system).__name__} {system!r:.60}")
+
+
+def static_equilibrium(system: System | str, theta0: float | None = None) -> Equilibrium:
     """Static equilibrium ``alpha*`` and the linearized natural frequency.
 
     Parameters
@@ -119,9 +133,12 @@ def static_equilibrium(system: System, theta0: float | None = None) -> Equilibri
 
     Raises
     ------
+    ParameterError
+        If ``system`` is neither a System nor the name of a preset or TOML file.
     GeometryError
         If the follower cannot touch the cam, or the cam cannot reach it.
     """
+    system = as_system(system)
     if theta0 is None:
         theta0 = system.motion.initial_angle
     if theta0 is None:
@@ -164,8 +181,9 @@ def static_equilibrium(system: System, theta0: float | None = None) -> Equilibri
                        stiffness=k)
 
 
-def natural_frequency(system: System) -> float:
-    """Linearized undamped natural frequency [Hz] about the static equilibrium."""
+def natural_frequency(system: System | str) -> float:
+    """Linearized undamped natural frequency [Hz] about the static equilibrium (of a
+    System, or of the preset or TOML file named, as :func:`static_equilibrium`)."""
     return static_equilibrium(system).natural_frequency
 
 

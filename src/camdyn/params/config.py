@@ -41,8 +41,15 @@ from camdyn.params.units import parse_quantity, parse_speed
 __all__ = [
     "SCHEMA", "PARAMETERS", "RADIUS_KEY", "list_presets", "preset_text", "load_system", "build_system", "flatten",
     "beta_unit", "convert_value", "unknown_key_error", "read_table", "system_from_toml", "system_to_toml",
-    "parse_assignments", "PROFILE_KEYS", "read_system",
+    "parse_assignments", "PROFILE_KEYS", "read_system", "loads_toml", "MAX_TOML_DEPTH", "MAX_TOML_CHARS",
 ]
+
+#: Deepest nesting of tables, arrays and inline tables a TOML file camdyn reads may have
+#: [-] (camdyn's own files nest three deep; Python's TOML parser recurses once per level).
+MAX_TOML_DEPTH = 32
+#: Longest TOML file camdyn reads [characters]: a configuration or sweep spec is a few
+#: kilobytes; 10 MB is no configuration.
+MAX_TOML_CHARS = 10_000_000
 
 #: Every parameter of a :class:`~camdyn.params.system.System`, in the dataclasses' order.
 PARAMETERS: tuple[Parameter, ...] = parameters(System)
@@ -70,6 +77,30 @@ def beta_unit(law: str, exponent: float) -> str:
     return lookup(law).unit_of_beta(exponent)
 
 
+def loads_toml(text: str, source="TOML") -> dict:
+    """``tomllib.loads(text)`` bounded: a text longer than :data:`MAX_TOML_CHARS` or
+    nested deeper than :data:`MAX_TOML_DEPTH` levels is refused with a
+    :class:`ParameterError` naming ``source`` (``tomllib.TOMLDecodeError`` passes to the
+    caller)."""
+    deep = ParameterError(f"{source}: TOML nested deeper than {MAX_TOML_DEPTH} levels (tables, arrays and "
+                          f"inline tables inside one another); a configuration nests a few levels")
+    if len(text) > MAX_TOML_CHARS:
+        raise ParameterError(f"{source}: {len(text)} characters of TOML is more than the {MAX_TOML_CHARS} a "
+                             f"configuration may have")
+    try:
+        table = tomllib.loads(text)
+    except RecursionError:
+        raise deep from None
+    stack = [(table, 1)]
+    while stack:
+        value, depth = stack.pop()
+        if depth > MAX_TOML_DEPTH:
+            raise deep
+        items = value.values() if isinstance(value, dict) else value
+        stack.extend((item, depth + 1) for item in items if isinstance(item, (dict, list)))
+    return table
+
+
 def flatten(table: dict, prefix: str = "") -> dict:
     """Flatten nested TOML tables into dotted keys."""
     out = {}
@@ -87,7 +118,7 @@ def read_toml_file(source: str | Path) -> dict:
     :class:`PresetError` that says why it cannot be read."""
     path = Path(str(source))
     try:
-        return flatten(tomllib.loads(path.read_text(encoding="utf-8")))
+        return flatten(loads_toml(path.read_text(encoding="utf-8"), source))
     except FileNotFoundError:
         raise PresetError(f"configuration file {str(source)!r} does not exist") from None
     except OSError as exc:
@@ -233,7 +264,7 @@ def read_table(source: str | Path) -> tuple[dict, str, str]:
         preset_text(str(source))  # raises a PresetError with suggestions
         raise AssertionError("unreachable")
     try:
-        table = tomllib.loads(text)
+        table = loads_toml(text, source)
     except tomllib.TOMLDecodeError as exc:
         raise PresetError(f"{source}: not valid TOML ({exc})") from None
     flat = flatten(table)
@@ -246,7 +277,7 @@ def system_from_toml(text: str) -> System:
     """Build a system from TOML text (as written by :func:`system_to_toml`); a
     ``[profile]`` table is refused (:func:`read_system` reads it)."""
     try:
-        flat = flatten(tomllib.loads(text))
+        flat = flatten(loads_toml(text, "system TOML"))
     except tomllib.TOMLDecodeError as exc:
         raise PresetError(f"system TOML is not valid ({exc})") from None
     if any(key.startswith("profile.") for key in flat):

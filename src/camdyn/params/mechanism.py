@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from camdyn.errors import ParameterError, UnitError, UnknownKeyError
-from camdyn.params.config import read_toml_file
+from camdyn.params.config import loads_toml, read_toml_file
 from camdyn.params.units import parse_quantity, parse_speed
 
 __all__ = ["KINDS", "DRIVE_KINDS", "SCHEMA", "MechanismSpec", "read_mechanism", "mechanism_spec_from_table",
@@ -323,6 +323,7 @@ def is_mechanism(source: str | Path) -> bool:
     """Whether ``source`` is a readable TOML file with a ``[mechanism]`` table."""
     path = Path(str(source))
     try:
-        return path.is_file() and isinstance(tomllib.loads(path.read_text(encoding="utf-8")).get("mechanism"), dict)
+        return path.is_file() and isinstance(loads_toml(path.read_text(encoding="utf-8"), source).get("mechanism"),
+                                             dict)
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
         return False

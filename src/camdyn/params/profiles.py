@@ -426,9 +426,17 @@ def translating_preset_text(name: str) -> str:
     return resources.files("camdyn.params.presets").joinpath(f"{name}.toml").read_text(encoding="utf-8")
 
 
+def _loads(text: str, source) -> dict:
+    """:func:`camdyn.params.config.loads_toml`: TOML of bounded depth and size (imported
+    here, since that module imports this one)."""
+    from camdyn.params.config import loads_toml
+
+    return loads_toml(text, source)
+
+
 def _declares_translating(text: str) -> bool:
     try:
-        follower = tomllib.loads(text).get("follower", {})
+        follower = _loads(text, "TOML").get("follower", {})
     except tomllib.TOMLDecodeError:
         return False
     return isinstance(follower, dict) and follower.get("kind") == TRANSLATING
@@ -453,7 +461,7 @@ def declared_kind(source: str | Path) -> str | None:
     """The ``[follower] kind`` a TOML file declares (None without one, or where unreadable)."""
     path = Path(str(source))
     try:
-        follower = tomllib.loads(path.read_text(encoding="utf-8")).get("follower", {}) if path.is_file() else {}
+        follower = _loads(path.read_text(encoding="utf-8"), source).get("follower", {}) if path.is_file() else {}
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
         return None
     kind = follower.get("kind") if isinstance(follower, dict) else None
@@ -488,7 +496,7 @@ def read_translating(source: str | Path, overrides: dict | None = None) -> Trans
     """
     text, name, folder = _source_text(source)
     try:
-        table = tomllib.loads(text)
+        table = _loads(text, source)
     except tomllib.TOMLDecodeError as exc:
         raise PresetError(f"{source}: not valid TOML ({exc})") from None
     flat = _flatten(table)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import warnings
 from dataclasses import dataclass, fields, replace
 
 from camdyn.errors import GeometryError, ParameterError, UnknownKeyError
@@ -288,6 +289,11 @@ class Contact:
         return lookup(self.damping)
 
 
+#: Friction coefficient above which a warning says it is outside any physical range [-]
+#: (clean metals in vacuum reach about 1-2; lubricated or dry cam contacts 0.01-0.6).
+MAX_FRICTION = 2.0
+
+
 @dataclass(frozen=True)
 class Friction:
     """Friction law on the follower, ``Ff = mu(vr) Fn`` (docs/model.md §3).
@@ -313,6 +319,10 @@ class Friction:
             raise ParameterError(f"friction.law must be one of {sorted(FRICTION_LAWS)}, got {self.law!r}")
         _nonnegative("friction", "coefficient", self.coefficient)
         _positive("friction", "smoothing", self.smoothing)
+        if self.coefficient > MAX_FRICTION:
+            warnings.warn(f"friction.coefficient = {self.coefficient:g} is outside any physical range (dry metal "
+                          f"pairs 0.1-1; above {MAX_FRICTION:g} is not a sliding contact): is it a percentage or a "
+                          f"typing slip?", UserWarning, stacklevel=2)
 
 
 @dataclass(frozen=True)

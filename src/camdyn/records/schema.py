@@ -9,15 +9,21 @@ A record is an :class:`xarray.Dataset` over ``time`` [s]; the channels are liste
 
 from __future__ import annotations
 
+import math
+import os
 import warnings
 
 import numpy as np
 import xarray as xr
 
-from camdyn.errors import DataError
+from camdyn.errors import DataError, ParameterError
 
 __all__ = ["CHANNEL_UNITS", "make_record", "check_sampling", "check_record", "angular_acceleration",
-           "check_consistency"]
+           "check_consistency", "require_record", "record_speed", "MAX_NOISE", "check_noise", "check_seed"]
+
+#: Largest sensor noise a synthetic record may be given, as a fraction of each channel's
+#: rms [-]: ten times the signal buries every harmonic an estimator reads.
+MAX_NOISE = 10.0
 
 #: SI unit and long name of every channel a record may hold.
 CHANNEL_UNITS = {
@@ -109,6 +115,48 @@ def angular_acceleration(ds: xr.Dataset, sensor_distance: float | None = None) -
     unit, long_name = CHANNEL_UNITS["alpha_ddot"]
     out["alpha_ddot"] = ("time", ds["a_t"].values / sensor_distance, {"units": unit, "long_name": long_name})
     return out
+
+
+def require_record(record, what: str = "record") -> xr.Dataset:
+    """``record`` itself when it is an xarray Dataset; anything else (a file name, an
+    array) is refused with a :class:`ParameterError` that says how to read a file."""
+    if isinstance(record, xr.Dataset):
+        return record
+    hint = (f" (read the file first: camdyn.io.measurements.read_measurement({str(record)!r}))"
+            if isinstance(record, (str, os.PathLike)) else "")
+    raise ParameterError(f"expected a {what} (an xarray Dataset from camdyn.io.measurements.read_measurement), "
+                         f"got {type(record).__name__} {record!r:.60}{hint}")
+
+
+def check_noise(noise) -> float:
+    """Refuse a noise level [fraction of each channel's rms] that is not a finite number
+    from 0 to :data:`MAX_NOISE`; return it as a float."""
+    if isinstance(noise, bool) or not isinstance(noise, (int, float, np.integer, np.floating)) \
+            or not (math.isfinite(noise) and 0.0 <= noise <= MAX_NOISE):
+        raise ParameterError(f"noise must be a fraction of each channel's rms from 0 to {MAX_NOISE:g} "
+                             f"(0.01 is 1 %), got {noise!r}")
+    return float(noise)
+
+
+def check_seed(seed) -> None:
+    """Refuse a noise seed that is neither None (fresh entropy) nor a whole number >= 0
+    (numpy's generators take any such number, however many digits)."""
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
+        raise ParameterError(f"the noise seed must be a whole number >= 0 (or None for fresh entropy), got {seed!r}")
+
+
+def record_speed(speed, key: str = "speed") -> float | None:
+    """A cam speed [Hz] given to an estimator: ``None``, a number of Hz, or text with a
+    unit as :func:`camdyn.simulate` reads it (``"11.55 Hz"``, ``"693 rpm"``); refused
+    unless finite and positive."""
+    if speed is None:
+        return None
+    from camdyn.params.units import parse_speed
+
+    hz = parse_speed(speed, key)
+    if not (math.isfinite(hz) and hz > 0):
+        raise ParameterError(f"{key} must be a positive, finite cam speed, got {speed!r}")
+    return hz
 
 
 def check_consistency(record: xr.Dataset, speed: float | None = None, runout: float | None = None,

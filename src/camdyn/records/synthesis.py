@@ -10,15 +10,15 @@ import xarray as xr
 from camdyn.analysis.kinematics import contact_start
 from camdyn.errors import ParameterError
 from camdyn.params.system import System
-from camdyn.records.schema import make_record
+from camdyn.records.schema import check_noise, check_seed, make_record
 from camdyn.simulation.runner import simulate
 
 __all__ = ["synthesize", "synthesize_impact_map"]
 
 
-def _check_noise_and_settle(noise: float, settle: float) -> None:
-    if not (math.isfinite(noise) and noise >= 0):
-        raise ParameterError(f"noise must be a non-negative fraction, got {noise!r}")
+def _check_noise_and_settle(noise: float, settle: float, seed=0) -> None:
+    check_noise(noise)
+    check_seed(seed)
     if not (math.isfinite(settle) and settle >= 0):
         raise ParameterError(f"settle must be a non-negative number of revolutions, got {settle!r}")
 
@@ -60,7 +60,7 @@ def synthesize(system: System, speed: float | None = None, revolutions: float = 
         true forces of the simulation (DC included), attributes ``speed_hz``, ``runout``,
         ``preset`` and ``noise``.
     """
-    _check_noise_and_settle(noise, settle)
+    _check_noise_and_settle(noise, settle, seed)
     if speed is not None:
         system = system.with_values(**{"motion.speed": float(speed)})
     ds = simulate(system, revolutions=settle + revolutions, sample_rate=sample_rate,
@@ -111,7 +111,7 @@ def synthesize_impact_map(system: System, speed: float | None = None, revolution
     """
     from camdyn.simulation.impact_map import simulate_impact_map
 
-    _check_noise_and_settle(noise, settle)
+    _check_noise_and_settle(noise, settle, seed)
     if speed is not None:
         system = system.with_values(**{"motion.speed": float(speed)})
     if not (isinstance(pulse_samples, (int, np.integer)) and pulse_samples >= 2):

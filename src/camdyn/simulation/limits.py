@@ -22,7 +22,7 @@ from camdyn.systems import registry as systems
 __all__ = ["LargeResultWarning", "check_number", "check_system", "check_tolerances", "check_sampling",
            "result_bytes", "available_memory", "check_memory", "event_room", "with_room_for_events",
            "RTOL_RANGE", "ATOL_RANGE", "MIN_SAMPLES_PER_PERIOD", "WARN_BYTES", "STEP_FRACTION",
-           "SCAN_FRACTION", "LONG_STEP_MODELS", "step_limits"]
+           "SCAN_FRACTION", "LONG_STEP_MODELS", "step_limits", "MAX_STEPS", "check_steps", "check_request"]
 
 #: Sensible relative tolerances [-]: tighter than 1e-14 is below double precision's
 #: resolution of the state; looser than 1e-2 no longer resolves the contact.
@@ -54,6 +54,9 @@ LONG_STEP_MODELS = (systems.CAM_FOLLOWER, systems.DRIVEN_CAM, systems.FLEXIBLE_P
 #: value and the temporaries (measured peak 9.6 B with tracemalloc for 1.65 million samples
 #: of the chapter 3 rig), rounded up [B].
 BYTES_PER_VALUE = 12
+#: Most accepted steps a run may be given (``max_steps``) [-]: at the integrator's
+#: fastest (about 10^7 steps a second) 10^12 steps are more than a day of stepping.
+MAX_STEPS = 10 ** 12
 
 
 class LargeResultWarning(UserWarning):
@@ -92,6 +95,58 @@ def check_tolerances(rtol: float, atol: float) -> None:
         if not (isinstance(value, (int, float)) and math.isfinite(value) and low <= value <= high):
             raise ParameterError(f"{name} = {value!r} is outside the sensible range {low:g} to {high:g}{unit}: "
                                  f"tighter is below double precision, looser does not resolve the contact")
+
+
+def check_steps(max_step, max_steps, duration: float | None = None) -> tuple[float | None, int]:
+    """Refuse, before any work, a largest step ``max_step`` [s] (``None``: the default)
+    that is not a positive finite number of seconds, a step budget ``max_steps`` that is
+    not a whole number from 1 to :data:`MAX_STEPS`, and a pair that cannot cover a run of
+    ``duration`` [s] (it needs at least ``duration / max_step`` steps). Returns them as
+    ``(float or None, int)``."""
+    if max_step is not None:
+        max_step = check_number("max_step", max_step, "s")
+        if not (math.isfinite(max_step) and max_step > 0):
+            raise ParameterError(f"max_step must be a positive, finite number of seconds, got {max_step!r}")
+    if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) \
+            or not 1 <= max_steps <= MAX_STEPS:
+        raise ParameterError(f"max_steps must be a whole number from 1 to {MAX_STEPS:.0e}, got {max_steps!r}")
+    max_steps = int(max_steps)
+    if max_step is not None and duration is not None and math.isfinite(duration) \
+            and duration / max_step > max_steps:
+        raise ParameterError(f"max_step = {max_step:g} s needs at least {duration / max_step:.3g} steps over "
+                             f"{duration:g} s, more than max_steps = {max_steps}; lengthen max_step or raise "
+                             f"max_steps")
+    return max_step, max_steps
+
+
+def check_request(what: str, items: float, item_bytes: float, limit: float | None = None,
+                  unit: str = "items") -> int:
+    """Refuse, before anything is allocated, a request that implies ``items`` items
+    (samples, grid points, resamples) of ``item_bytes`` bytes each: more than ``limit``
+    items (when given), or more memory than is free (:func:`check_memory`, which also
+    announces a large one). The message names the count, its size and the limit.
+    Returns the count as an int."""
+    items = float(items)
+    if not (math.isfinite(items) and items >= 0):
+        raise ParameterError(f"{what} implies {items!r} {unit}: not a size that can be computed")
+    size = items * float(item_bytes)
+    if limit is not None and items > limit:
+        raise ParameterError(f"{what} implies {items:.3g} {unit} (about {_size_text(size)}); the limit is "
+                             f"{limit:.3g} {unit}")
+    free = available_memory()
+    if free >= 0 and size > 0.8 * free:
+        raise ParameterError(f"{what} implies {items:.3g} {unit} of {item_bytes:g} B, about {_size_text(size)}, "
+                             f"but only {_size_text(free)} of memory are free (the limit is 80 % of it)")
+    check_memory(int(size), what)
+    return int(items)
+
+
+def _size_text(size: float) -> str:
+    """``size`` [B] as text in kB, MB, GB or TB."""
+    for unit, scale in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if size >= scale:
+            return f"{size / scale:.3g} {unit}"
+    return f"{size:.0f} B"
 
 
 def check_sampling(sample_rate: float, period: float, duration: float) -> int:

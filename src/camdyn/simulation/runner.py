@@ -235,6 +235,7 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
         duration = revolutions * period
     if not (math.isfinite(duration) and duration > 0):
         raise ParameterError(f"duration must be positive, got {duration!r}")
+    max_step, max_steps = limits.check_steps(max_step, max_steps, duration)
     n_out = limits.check_sampling(sample_rate, period, duration)
     limits.check_memory(limits.result_bytes(n_out, 3 + len(CHANNELS)), "the simulation's result")
     prep = prepare(system)

@@ -34,6 +34,7 @@ import multiprocessing
 import os
 import re
 import threading
+import warnings
 
 import numpy as np
 import xarray as xr
@@ -77,6 +78,21 @@ def default_workers() -> int:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - not Linux
         return os.cpu_count() or 1
+
+
+def check_workers(workers, dask: str | None = None) -> int:
+    """The number of workers asked for: a whole number >= 0, refused otherwise; more
+    local processes than this process's cores (:func:`default_workers`) only compete
+    for them, so such a number is lowered to the cores, with a warning (a Dask
+    cluster's workers are not counted against the local cores)."""
+    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 0:
+        raise ParameterError(f"workers must be a whole number >= 0, got {workers!r}")
+    cores = default_workers()
+    if dask is None and workers > cores:
+        warnings.warn(f"workers = {workers} is more than the {cores} cores this process may use; using {cores}",
+                      UserWarning, stacklevel=3)
+        return cores
+    return int(workers)
 
 
 def prepare_chunk(spec: SweepSpec, chunk: int) -> dict:
@@ -311,9 +327,14 @@ def run_sweep(spec: SweepSpec, workers: int | None = None, dask: str | None = No
     xarray.Dataset
         The result file opened lazily (the data stays on disk until used).
     """
-    workers = default_workers() if workers is None else int(workers)
-    if workers < 0 or threads < 1:
-        raise ParameterError("workers must be >= 0 and threads >= 1")
+    if not isinstance(spec, SweepSpec):
+        hint = (f" (load it first: camdyn.sweeps.load_spec({spec!r}))" if isinstance(spec, (str, os.PathLike))
+                else "")
+        raise ParameterError(f"expected a SweepSpec (from camdyn.sweeps.load_spec or spec_from_dict), got "
+                             f"{type(spec).__name__} {spec!r:.60}{hint}")
+    workers = default_workers() if workers is None else check_workers(workers, dask)
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
+        raise ParameterError(f"threads must be a whole number >= 1, got {threads!r}")
     check_dask_address(dask)
     say = echo or (lambda _msg: None)
     store = Checkpoint(spec, restart=restart, say=say)

@@ -64,6 +64,7 @@ from camdyn.params.config import (
     SCHEMA,
     convert_value,
     load_system,
+    loads_toml,
     system_from_toml,
     system_to_toml,
     unknown_key_error,
@@ -92,6 +93,21 @@ _MECHANISM_RUN = {"samples_per_revolution": 1024, "atol": 1e-11}
 _TABLES = {"system", "vary", "run", "metrics", "output"}
 #: Most points a sweep may have [-] (10^9 at a millisecond each is 12 CPU-days).
 MAX_POINTS = 10 ** 9
+#: Most values one varied parameter may take [-]: finer than 10^5 values along one
+#: parameter resolves nothing a bifurcation diagram or map shows; split the range.
+MAX_VALUES = 10 ** 5
+#: Values of each varied parameter that are checked to make a valid system before the
+#: sweep (its ends and evenly spaced ones between), however many it takes [-].
+CHECKED_VALUES = 17
+#: Memory a parameter value takes while the spec is read: the float and its array
+#: element [B].
+BYTES_PER_VALUE = 40
+#: Most output samples a worker's chunk may hold (points x revolutions x samples per
+#: revolution) [-].
+MAX_CHUNK_SAMPLES = 10 ** 9
+#: Memory one output sample of one point takes in the sweep kernel: the window's seven
+#: channels, the state, the derived channels and the output times, 8 B each, rounded up [B].
+BYTES_PER_SAMPLE = 320
 
 
 @dataclass(frozen=True)
@@ -229,6 +245,14 @@ def _number(table: str, key: str, raw, integer: bool = False, minimum: float | N
     return int(raw) if integer else float(raw)
 
 
+def _limits():
+    """:mod:`camdyn.simulation.limits`, imported when a spec is checked (a worker that
+    unpickles a spec needs none of it)."""
+    from camdyn.simulation import limits
+
+    return limits
+
+
 def _rocking_key(key: str) -> tuple[str, callable]:
     """The SI unit of a rocking sweep's varied ``key`` and its raw-to-SI conversion."""
     if key not in SCHEMA:
@@ -259,6 +283,8 @@ def _values(i: int, entry: dict, key_unit=_rocking_key) -> Vary:
         raw = entry["values"]
         if not isinstance(raw, list) or not raw:
             raise ParameterError(f"sweep spec: {where} values must be a non-empty list")
+        _limits().check_request(f"sweep spec: {where} ({key}) values", len(raw), BYTES_PER_VALUE, limit=MAX_VALUES,
+                             unit="values")
         values = np.array([si(r) for r in raw])
     else:
         missing = [k for k in ("start", "stop", "num") if k not in entry]
@@ -266,6 +292,8 @@ def _values(i: int, entry: dict, key_unit=_rocking_key) -> Vary:
             raise ParameterError(f"sweep spec: {where} ({key}) needs values, or start, stop and num "
                                  f"(missing {', '.join(missing)})")
         num = int(_number("vary", "num", entry["num"], integer=True))
+        _limits().check_request(f"sweep spec: {where} ({key}) num = {num}", num, BYTES_PER_VALUE, limit=MAX_VALUES,
+                             unit="values")
         start, stop = si(entry["start"]), si(entry["stop"])
         spacing = entry.get("spacing", "linear")
         if spacing == "linear":
@@ -367,7 +395,16 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
     atol = _number("run", "atol", run["atol"])
     if rtol >= 1e-2:
         raise ParameterError(f"sweep spec: [run] rtol = {rtol:g} is too loose to mean anything (use < 1e-2)")
+    limits = _limits()
+    try:
+        limits.check_tolerances(rtol, atol)
+    except ParameterError as exc:
+        raise ParameterError(f"sweep spec: [run] {exc}") from None
     chunk = int(_number("run", "chunk", run["chunk"], integer=True))
+    # a worker holds a chunk's sampled runs at once: every revolution's samples of each point
+    limits.check_request(f"sweep spec: [run] samples_per_revolution = {samples} over {revolutions} revolutions "
+                         f"for each of a chunk's {chunk} points", chunk * revolutions * samples, BYTES_PER_SAMPLE,
+                         limit=MAX_CHUNK_SAMPLES, unit="samples")
 
     met = _table(spec, "metrics", {"names", "harmonics"})
     allowed = list(METRICS) if not kind else list(mechanism_spec.KIND_METRICS[kind])
@@ -404,7 +441,10 @@ def _check_values(base: System | None, vary, source: str, overrides: dict) -> No
         return
     from camdyn.simulation.runner import prepare
     for v in vary:
-        for value in sorted(set(v.values)):
+        values = sorted(set(v.values))
+        if len(values) > CHECKED_VALUES:   # the ends and evenly spaced values between: not one per value
+            values = [values[int(i)] for i in np.unique(np.linspace(0, len(values) - 1, CHECKED_VALUES).round())]
+        for value in values:
             try:
                 prepare(base.with_values(**{v.key: value}))
             except CamdynError as exc:
@@ -444,7 +484,7 @@ def load_spec(path: str | Path) -> SweepSpec:
     if not path.is_file():
         raise ParameterError(f"sweep spec {str(path)!r} does not exist")
     try:
-        table = tomllib.loads(path.read_text(encoding="utf-8"))
+        table = loads_toml(path.read_text(encoding="utf-8"), f"sweep spec {path.name}")
     except UnicodeDecodeError as exc:
         raise ParameterError(f"sweep spec {path.name}: not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
                              f"{exc.start}); a sweep spec is TOML, saved as UTF-8") from None

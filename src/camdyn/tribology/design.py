@@ -29,13 +29,28 @@ from camdyn.model.equilibrium import static_equilibrium
 from camdyn.params.system import System
 from camdyn.tribology import contact_conditions, lubrication_regime
 
-__all__ = ["design_map", "AXES"]
+__all__ = ["design_map", "check_design_size", "AXES", "MAX_POINTS"]
 
 #: Grid axes: name -> (dotted parameter set from the ratio, long name).
 AXES = {
     "runout": "runout ratio e/a",
     "axis_ratio": "axis ratio b/a",
 }
+
+
+#: Most grid points a design map may have [-]: each point is an inverse-kinematics
+#: revolution and a contact analysis, some milliseconds; 10^5 of them take minutes.
+MAX_POINTS = 10 ** 5
+#: Memory one grid point takes in the map's layers and values, with room [B].
+BYTES_PER_POINT = 64
+
+
+def check_design_size(points: float) -> None:
+    """Refuse, before anything is allocated, a design grid of more than
+    :data:`MAX_POINTS` points (:func:`camdyn.simulation.limits.check_request`)."""
+    from camdyn.simulation import limits
+
+    limits.check_request("the design grid", points, BYTES_PER_POINT, limit=MAX_POINTS, unit="points")
 
 
 def _system_at(system: System, axis: str, ratio: float) -> System:
@@ -86,6 +101,12 @@ def design_map(system: System, axis: str, ratios, speeds, lubricant=None, roughn
         NaN when no point is admissible).
     """
     ratios, speeds = _checked_grid(axis, ratios, speeds, regime)
+    check_design_size(ratios.size * speeds.size)
+    for name, margin, low in (("harmonic_margin", harmonic_margin, "positive"),
+                              ("contact_margin", contact_margin, "non-negative")):
+        if isinstance(margin, bool) or not isinstance(margin, (int, float, np.integer, np.floating)) \
+                or not (math.isfinite(margin) and (margin > 0 if low == "positive" else margin >= 0)):
+            raise ParameterError(f"{name} must be a {low}, finite ratio, got {margin!r}")
     shape = (ratios.size, speeds.size)
     layers = {name: np.zeros(shape, bool) for name in ("contact_kept", "sliding_reversal", "harmonics_clear",
                                                       "regime_ok")}
@@ -133,6 +154,10 @@ def _checked_grid(axis: str, ratios, speeds, regime: str | None) -> tuple[np.nda
     if axis == "runout" and (np.any(ratios < 0) or np.any(ratios >= 1)):
         raise ParameterError(f"runout ratios e/a must lie in [0, 1): the cam's pivot must be inside the cam, "
                              f"got {', '.join(f'{r:g}' for r in ratios if not 0 <= r < 1)}")
+    for name, grid, unit in (("ratios", ratios, ""), ("speeds", speeds, " Hz")):
+        if grid.size > 1 and not np.all(np.diff(grid) > 0):
+            raise ParameterError(f"the design {name} must increase, each value once (START:STOP with START < "
+                                 f"STOP), got {grid[0]:g}{unit} ... {grid[-1]:g}{unit}")
     if regime not in (None, "boundary", "mixed", "EHL"):
         raise ParameterError(f"regime must be boundary, mixed or EHL, got {regime!r}")
     return ratios, speeds

@@ -32,7 +32,7 @@ from camdyn.errors import ParameterError, PresetError
 from camdyn.model.contact import equivalent_radius
 from camdyn.model.layout import effective_modulus
 from camdyn.params.system import System
-from camdyn.params.units import parse_quantity
+from camdyn.params.units import parse_quantity, parse_speed
 
 __all__ = ["Lubricant", "load_lubricant", "list_lubricants", "roughness_preset", "hamrock_dowson_film",
            "pan_hamrock_film", "lambda_ratio", "lubrication_regime", "contact_conditions"]
@@ -190,6 +190,13 @@ def contact_conditions(system: System, speed: float | None = None, lubricant: Lu
         ``sliding_velocity``, ``sum_velocity`` [m/s], ``slide_to_roll`` [-], and with a
         lubricant ``film_thickness`` [m], ``lambda_ratio`` [-], ``regime``.
     """
+    if kinematics is None:
+        hz = system.motion.speed if speed is None else parse_speed(speed)
+        if not (math.isfinite(hz) and hz > 0):
+            raise ParameterError(f"the contact conditions need a turning cam: the speed must be positive and finite, "
+                                 f"got {speed if speed is not None else hz!r} (at rest the velocities vanish and the "
+                                 f"film thickness is undefined)")
+        speed = hz
     ik = kinematics if kinematics is not None else inverse_kinematics(system, speed=speed, points=points)
     fn = np.maximum(ik["Fn"].values, 0.0)
     rho_c = ik["cam_curvature_radius"].values
