@@ -128,6 +128,16 @@ def test_simulate_refuses_a_step_too_short_for_its_budget(impact_rig, no_simulat
         camdyn.simulate(impact_rig, speed=16, revolutions=2, max_step=1e-9, max_steps=1000)
 
 
+def test_mechanisms_refuse_a_nan_max_step(impact_rig, monkeypatch):
+    from camdyn.integrator import driver
+    from camdyn.simulation.flexible_pivot import simulate_flexible_pivot
+
+    monkeypatch.setattr(driver, "integrate", _no_work)
+    with pytest.raises(ParameterError, match="max_step must be a positive, finite number of seconds, got nan"):
+        simulate_flexible_pivot(impact_rig.with_values(**{"motion.speed": 16.0}), 1e9, 50.0, revolutions=1,
+                                max_step=float("nan"))
+
+
 # -- 2b. sweep and map tolerances ----------------------------------------------------------
 
 

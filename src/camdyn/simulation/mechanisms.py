@@ -146,6 +146,7 @@ def _run_counters(system_id, p, y0, duration, sample_rate, period, rtol, atol, m
     duration = limits.check_number("duration", duration, "s")
     if not (math.isfinite(duration) and duration > 0):
         raise ParameterError(f"duration must be positive, got {duration!r}")
+    max_step, _ = limits.check_steps(max_step, 50_000_000, duration)
     n_out = limits.check_sampling(sample_rate, period, duration)
     limits.check_memory(limits.result_bytes(n_out, 20), "the simulation's result")
     t_out = np.minimum(np.arange(n_out) / sample_rate, duration)
