@@ -317,6 +317,24 @@ def test_a_stale_link_is_removed_without_following_it(tmp_path):
     assert not os.path.lexists(stale) and victim.read_text() == VICTIM
 
 
+def test_half_written_parts_of_a_killed_sweep_are_removed_on_resume(tmp_path):
+    # the parts are saved without a scan of their folder each (it holds one file per
+    # chunk); the folder is cleaned once, when the sweep starts
+    from camdyn.sweeps.store import Checkpoint
+
+    spec = _spec(tmp_path)
+    Checkpoint(spec).close()
+    parts = tmp_path / "s.nc.parts"
+    stale = _writer_killed_mid_write(parts / "chunk_000001.npz")
+    store = Checkpoint(spec)
+    try:
+        assert not stale.exists()
+        store.save(0, {"x": np.arange(3.0)})
+        assert sorted(p.name for p in parts.iterdir()) == ["chunk_000000.npz", "manifest.json"]
+    finally:
+        store.close()
+
+
 def test_a_sweep_refused_for_a_changed_spec_leaves_no_lock(tmp_path):
     from camdyn.sweeps.store import Checkpoint
 

@@ -39,7 +39,8 @@ from pathlib import Path
 
 from camdyn.errors import CamdynError, OutputError, StorageError
 
-__all__ = ["atomic_output", "write_text", "check_writable", "expect_new", "temporary_prefix", "free_space"]
+__all__ = ["atomic_output", "write_text", "check_writable", "expect_new", "remove_stale", "temporary_prefix",
+           "free_space"]
 
 #: Outputs to publish only if no file of that name exists by then (:func:`expect_new`).
 _EXPECT_NEW: set[str] = set()
@@ -107,11 +108,12 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def remove_stale(folder: Path, name: str) -> list[str]:
-    """Remove the temporaries of output ``name`` in ``folder`` left by processes of this
-    machine that no longer run (killed during a write); return their names. A symbolic
-    link of such a name is removed, never followed."""
-    pattern = re.compile(rf"\.{re.escape(name)}\.(\d+)-{_host_tag()}\.[A-Za-z0-9_]+\.(tmp|probe)")
+def remove_stale(folder: Path, name: str | None = None) -> list[str]:
+    """Remove the temporaries of output ``name`` (of any output: None) in ``folder`` left by
+    processes of this machine that no longer run (killed during a write); return their
+    names. A symbolic link of such a name is removed, never followed."""
+    output = ".+" if name is None else re.escape(name)
+    pattern = re.compile(rf"\.{output}\.(\d+)-{_host_tag()}\.[A-Za-z0-9_]+\.(tmp|probe)")
     removed = []
     try:
         entries = list(os.scandir(folder))
@@ -206,7 +208,7 @@ def _publish(tmp: Path, path: Path, exclusive: bool) -> None:
 
 @contextlib.contextmanager
 def atomic_output(path: str | os.PathLike, expected_bytes: int | None = None,
-                  exclusive: bool | None = None) -> Iterator[Path]:
+                  exclusive: bool | None = None, clean: bool = True) -> Iterator[Path]:
     """Write to a temporary path that replaces ``path`` only if the block succeeds.
 
     Parameters
@@ -219,6 +221,10 @@ def atomic_output(path: str | os.PathLike, expected_bytes: int | None = None,
     exclusive : bool, optional
         Refuse to replace a file of that name that exists when the write ends (default:
         whether :func:`expect_new` registered ``path``).
+    clean : bool
+        First remove the temporaries of ``path`` that killed writers left
+        (:func:`remove_stale`: one pass over the folder). A caller writing many files
+        into one folder passes False and calls :func:`remove_stale` once instead.
 
     Yields
     ------
@@ -244,7 +250,8 @@ def atomic_output(path: str | os.PathLike, expected_bytes: int | None = None,
         created = _make_folders(path.parent)
     except OSError as exc:
         raise _explain(exc, path, expected_bytes) from None
-    remove_stale(path.parent, path.name)
+    if clean:
+        remove_stale(path.parent, path.name)
     try:
         fd, name = tempfile.mkstemp(dir=path.parent, prefix=temporary_prefix(path.name), suffix=".tmp")
         os.close(fd)

@@ -31,7 +31,7 @@ import numpy as np
 
 from camdyn import __version__
 from camdyn.errors import OutputError, ParameterError
-from camdyn.io.atomic import atomic_output, write_text
+from camdyn.io.atomic import atomic_output, remove_stale, write_text
 from camdyn.sweeps import metrics as M
 from camdyn.sweeps.spec import METRICS, SweepSpec
 
@@ -97,6 +97,7 @@ class Checkpoint:
                 self.folder.mkdir(parents=True, exist_ok=True)
                 write_text(manifest, json.dumps({"digest": self.digest, "chunks": spec.chunks,
                                                  "points": spec.points, "camdyn": __version__}))
+            remove_stale(self.folder)   # parts half written by a killed run (not per part: O(chunks^2))
         except BaseException:   # refused (another spec), or the disk is full: no lock left behind
             self.close()
             raise
@@ -134,7 +135,7 @@ class Checkpoint:
     def save(self, chunk: int, arrays: dict) -> None:
         """Write one chunk's arrays with this sweep's digest and their checksum, atomically."""
         stamped = dict(arrays, _digest=np.array(self.digest), _checksum=np.array(_checksum(arrays)))
-        with atomic_output(self.path(chunk)) as tmp:
+        with atomic_output(self.path(chunk), clean=False) as tmp:   # cleaned once, in __init__
             with tmp.open("wb") as fh:
                 np.savez(fh, **stamped)
         self._verified.add(chunk)
