@@ -198,10 +198,12 @@ def test_sweep_spec_refuses_too_many_values_at_once(tmp_path, counted_prepare, n
 
 
 def test_sweep_spec_checks_a_bounded_number_of_values(tmp_path, counted_prepare):
-    from camdyn.sweeps.spec import CHECKED_VALUES, spec_from_dict
+    from camdyn.sweeps.spec import spec_from_dict
 
     vary = {"key": "motion.speed", "start": "10 Hz", "stop": "20 Hz", "num": 2000}
     spec = spec_from_dict(_sweep(tmp_path, vary=vary))
+    from camdyn.sweeps.spec import CHECKED_VALUES
+
     assert spec.points == 2000 and len(counted_prepare) == CHECKED_VALUES
 
 
@@ -424,3 +426,27 @@ def test_tribology_refuses_a_cam_at_rest_before_work(capsys, friction_rig, monke
     status, err = _cli(capsys, "tribology", "sundar2014-friction", "--speed", "0Hz")
     _one_error_line(status, err, "the contact conditions need a turning cam", "got 0.0")
     assert "All-NaN" not in err
+
+
+def test_mechanism_sweep_spec_checks_a_bounded_number_of_values(tmp_path, monkeypatch):
+    from pathlib import Path
+
+    from camdyn.sweeps import mechanism_spec
+    from camdyn.sweeps.spec import spec_from_dict
+
+    real, calls = mechanism_spec.check_mechanism, []
+
+    def check(mechanism):
+        calls.append(1)
+        if len(calls) > 100:
+            raise AssertionError("the spec's check builds a mechanism per value")
+        return real(mechanism)
+
+    monkeypatch.setattr(mechanism_spec, "check_mechanism", check)
+    source = str(Path(__file__).parent.parent / "examples" / "mechanisms" / "flexible_pivot.toml")
+    spec = spec_from_dict({"system": {"source": source},
+                           "vary": [{"key": "pivot.stiffness", "start": "2e7 N/m", "stop": "5e7 N/m", "num": 1000}],
+                           "output": {"path": str(tmp_path / "m.nc")}})
+    from camdyn.sweeps.spec import CHECKED_VALUES
+
+    assert spec.points == 1000 and len(calls) == 1 + CHECKED_VALUES     # the base mechanism, then the values

@@ -146,9 +146,13 @@ def base_mechanism(source: str, overrides: dict) -> tuple[str, str]:
 
 def check_values(source: str, overrides: dict, vary) -> None:
     """Apply every value of every varied key on its own to the base mechanism and check
-    it; the first bad one is refused naming ``[[vary]]`` key and value."""
+    it (:func:`camdyn.sweeps.spec.checked_values`: at most
+    :data:`~camdyn.sweeps.spec.CHECKED_VALUES` of each key, its ends among them); the
+    first bad one is refused naming ``[[vary]]`` key and value."""
+    from camdyn.sweeps.spec import checked_values
+
     for v in vary:
-        for value in sorted(set(v.values)):
+        for value in checked_values(v.values):
             try:
                 check_mechanism(point_mechanism(source, overrides, {v.key: value}))
             except CamdynError as exc:

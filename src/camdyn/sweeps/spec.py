@@ -431,6 +431,16 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
                      mechanism=kind, _base=base)
 
 
+def checked_values(values) -> list[float]:
+    """The values of one varied parameter that are checked before a sweep: all of them,
+    sorted, up to :data:`CHECKED_VALUES`; of more, the ends and evenly spaced ones
+    between (the check does not grow with the grid)."""
+    values = sorted(set(values))
+    if len(values) > CHECKED_VALUES:
+        values = [values[int(i)] for i in np.unique(np.linspace(0, len(values) - 1, CHECKED_VALUES).round())]
+    return values
+
+
 def _check_values(base: System | None, vary, source: str, overrides: dict) -> None:
     """Every value on its own must make a valid system (negative mass, unreachable cam,
     ...) or mechanism (``base`` None); only combinations of values may fail (those
@@ -441,10 +451,7 @@ def _check_values(base: System | None, vary, source: str, overrides: dict) -> No
         return
     from camdyn.simulation.runner import prepare
     for v in vary:
-        values = sorted(set(v.values))
-        if len(values) > CHECKED_VALUES:   # the ends and evenly spaced values between: not one per value
-            values = [values[int(i)] for i in np.unique(np.linspace(0, len(values) - 1, CHECKED_VALUES).round())]
-        for value in values:
+        for value in checked_values(v.values):
             try:
                 prepare(base.with_values(**{v.key: value}))
             except CamdynError as exc:
