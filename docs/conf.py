@@ -55,7 +55,7 @@ toc_object_entries = False  # the "on this page" column lists sections, not ever
 
 # -- MyST: the Markdown pages of docs/ --------------------------------------------------------
 
-myst_enable_extensions = ["colon_fence", "deflist"]
+myst_enable_extensions = ["colon_fence", "deflist", "dollarmath", "amsmath"]
 # "## 1. Frames and conventions" gets the anchor #1-frames-and-conventions, as on GitHub,
 # so the pages' intra-document links resolve in both places
 myst_heading_anchors = 4

@@ -26,16 +26,13 @@ EXAMPLE = ROOT / "examples" / "models" / "valve_train.py"
 
 
 @pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    """A fresh cache folder for the generated drivers, for this module's tests."""
-    folder = tmp_path_factory.mktemp("camdyn-cache")
-    old = os.environ.get("CAMDYN_CACHE_DIR")
-    os.environ["CAMDYN_CACHE_DIR"] = str(folder)
-    yield folder
-    if old is None:
-        del os.environ["CAMDYN_CACHE_DIR"]
-    else:
-        os.environ["CAMDYN_CACHE_DIR"] = old
+def cache():
+    """camdyn's cache folder of generated drivers (the default one, or $CAMDYN_CACHE_DIR),
+    shared with the gallery's valve-train example so that the docs build loads the driver
+    this module compiles."""
+    from camdyn.integrator.instances import cache_root
+
+    return cache_root().parent
 
 
 @pytest.fixture(scope="module")
@@ -140,7 +137,7 @@ def test_second_process_loads_the_driver_without_compiling(valve, cache):
         stats = model_driver(valve_train.VALVE_TRAIN).integrate.stats
         print(sum(stats.cache_hits.values()), sum(stats.cache_misses.values()))
     """)
-    env = dict(os.environ, CAMDYN_CACHE_DIR=str(cache))
+    env = dict(os.environ, CAMDYN_CACHE_DIR=str(cache))   # the folder this process used
     run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=600)
     assert run.returncode == 0, run.stderr
     hits, misses = map(int, run.stdout.split()[-2:])
@@ -195,3 +192,55 @@ def test_adapter_calls_the_models_functions(valve):
     assert "from valve_train import rhs as _rhs" in source
     assert "def state_size(system):\n    return 4" in source
     assert "def guard_count(system):\n    return 2" in source
+
+
+def test_valve_train_jacobian_against_differences(valve):
+    bound = valve.VALVE_TRAIN.bind()
+    p = bound.p
+    rng = np.random.default_rng(7)
+    n = 4
+    for mode in ([1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [0.0, 0.0]):
+        mode = np.array(mode)
+        for _ in range(5):
+            t = rng.uniform(0.0, 1.0 / 40.0)
+            y = np.array([rng.uniform(-2e-5, 8e-3), rng.uniform(-0.5, 0.5), rng.uniform(-1e-3, 4e-3),
+                          rng.uniform(-0.5, 0.5)])
+            f0 = np.empty(n)
+            valve.rhs(t, y, mode, p, f0)
+            jac = np.empty((n, n))
+            valve.jacobian(t, y, f0, mode, p, jac)
+            typical = (1e-3, 0.1, 1e-3, 0.1)   # m, m/s: steps well above the rounding of f
+            for j in range(n):
+                h = 1e-5 * max(abs(y[j]), typical[j])
+                fp, fm = np.empty(n), np.empty(n)
+                valve.rhs(t, y + h * np.eye(n)[j], mode, p, fp)
+                valve.rhs(t, y - h * np.eye(n)[j], mode, p, fm)
+                column = (fp - fm) / (2 * h)
+                assert np.allclose(jac[:, j], column, rtol=1e-6, atol=1e-6 * np.abs(column).max() + 1e-9), (mode, j)
+
+
+def test_valve_train_periodic_orbit_against_scipy(valve):
+    from camdyn.continuation import bound_problem, continue_orbits, find_orbit
+
+    bound = valve.VALVE_TRAIN.bind({"speed": 30.0})
+    problem = bound_problem(bound, rtol=1e-10, atol=1e-13)
+    orbit = find_orbit(problem, transient=30)
+    q = dict(zip(bound.model.parameter_names, bound.values))
+    period = 1.0 / 30.0
+    # periodicity checked by the independent SciPy model: one period from the orbit's state
+    end, _ = _scipy_valve_train(q, orbit.state, np.array([0.0, period]))
+    scale = orbit.extent   # the largest magnitude of each state component over the orbit
+    assert np.all(np.abs(end[-1] - orbit.state) <= 1e-6 * scale + 1e-12)
+    # the monodromy matrix against central differences of the SciPy flow
+    monodromy = np.empty((4, 4))
+    for j in range(4):
+        h = 1e-6 * scale[j]
+        plus, _ = _scipy_valve_train(q, orbit.state + h * np.eye(4)[j], np.array([0.0, period]))
+        minus, _ = _scipy_valve_train(q, orbit.state - h * np.eye(4)[j], np.array([0.0, period]))
+        monodromy[:, j] = (plus[-1] - minus[-1]) / (2 * h)
+    expected = np.sort(np.abs(np.linalg.eigvals(monodromy)))[::-1]
+    got = np.sort(np.abs(orbit.multipliers))[::-1]
+    assert np.allclose(got, expected, rtol=1e-3, atol=1e-4)
+    # and a short branch in the speed
+    branch = continue_orbits(problem, orbit, 31.0, step=0.01, max_step=0.05, max_points=40)
+    assert branch.orbits[-1].parameter == pytest.approx(31.0)

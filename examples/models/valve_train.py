@@ -87,6 +87,33 @@ def rhs(t, y, mode, p, dydt):
 
 
 @numba.njit(cache=True)
+def jacobian(t, y, f0, mode, p, jac):
+    """``d f / d y`` of eqs. V1-V6 (the variational system's, for periodic orbits)."""
+    s, sd, _ = cam_lift(t, p)
+    dfc_dx = dfc_dv = dfs_dx = dfs_dv = 0.0
+    if mode[0] > 0.5:
+        d = s - p[LASH] - y[0]
+        factor = 1.0 + p[ALPHA_C] * (sd - y[1])
+        if p[K_C] * d * factor > 0.0:
+            dfc_dx, dfc_dv = -p[K_C] * factor, -p[K_C] * d * p[ALPHA_C]
+    if mode[1] > 0.5:
+        factor = 1.0 - p[ALPHA_S] * y[1]
+        if -p[K_SEAT] * y[0] * factor > 0.0:
+            dfs_dx, dfs_dv = -p[K_SEAT] * factor, p[K_SEAT] * y[0] * p[ALPHA_S]
+    jac[:, :] = 0.0
+    jac[0, 1] = 1.0
+    jac[1, 0] = (dfc_dx + dfs_dx - p[K2]) / p[M_V]
+    jac[1, 1] = (dfc_dv + dfs_dv - p[C_SPRING]) / p[M_V]
+    jac[1, 2] = p[K2] / p[M_V]
+    jac[1, 3] = p[C_SPRING] / p[M_V]
+    jac[2, 3] = 1.0
+    jac[3, 0] = p[K2] / p[M_S]
+    jac[3, 1] = p[C_SPRING] / p[M_S]
+    jac[3, 2] = -(p[K1] + p[K2]) / p[M_S]
+    jac[3, 3] = -2.0 * p[C_SPRING] / p[M_S]
+
+
+@numba.njit(cache=True)
 def guards(t, y, f, known, p, values, rates):
     s, sd, _ = cam_lift(t, p)
     values[0] = s - p[LASH] - y[0]     # cam contact's penetration [m]
@@ -159,7 +186,7 @@ VALVE_TRAIN = Model(
     modes=["cam_contact", "seated"],
     outputs=[Quantity("cam_lift", "m", "cam lift"), Quantity("cam_force", "N", "cam contact force"),
              Quantity("seat_force", "N", "seat force"), Quantity("spring_force", "N", "spring force on the retainer")],
-    functions={"rhs": rhs, "guards": guards, "expected_sign": expected_sign, "transition": transition,
+    functions={"rhs": rhs, "jacobian": jacobian, "guards": guards, "expected_sign": expected_sign, "transition": transition,
                "initial_mode": initial_mode, "monitor": monitor, "outputs": outputs},
     speed="speed",
     initial_state=seated_state,

@@ -178,7 +178,10 @@ def _driver_settings(problem: Problem, period: float, max_steps: int = 50_000_00
     period ``period`` [s]: the largest step [s] and the scan interval [s] of
     :func:`~camdyn.simulation.limits.step_limits`, DOP853, the limits on steps and
     events, interruptible."""
-    h_max, scan = limits.step_limits(period, problem.system_id)
+    if problem.step_fraction is not None:
+        h_max = scan = problem.step_fraction * period
+    else:
+        h_max, scan = limits.step_limits(period, problem.system_id)
     return h_max, driver.METHOD_DOP853, int(max_steps), 100_000, True, scan
 
 
@@ -203,8 +206,8 @@ def _variational(problem: Problem, p, period, x, value, t0, t1, samples, max_ste
     times = np.linspace(t0, t1, count)
     start = np.concatenate([y0, np.eye(n).ravel()])
     rtol, atol = problem.matrix_tolerances()
-    y, modes, log, counters = driver.integrate(systems.VARIATIONAL + problem.system_id, p, start, t0, t1, times,
-                                           rtol, atol, *_driver_settings(problem, period, max_steps))
+    y, modes, log, counters = problem.run(systems.VARIATIONAL + problem.system_id, p, start, t0, t1,
+                                          times, rtol, atol, *_driver_settings(problem, period, max_steps))
     limits.check_run(counters, f"shooting run at {problem.name} = {value:g}")
     on_contact = log[:, driver.EVENT_GUARD] == 0
     if not problem.impacts:
@@ -214,17 +217,17 @@ def _variational(problem: Problem, p, period, x, value, t0, t1, samples, max_ste
     states = y[:, :n]
     matrix = y[-1, n:].reshape(n, n)[:u, :u].copy()
     return Flow(y[-1, :u].copy(), matrix, int(on_contact.sum()), int(counters[driver.COUNT_EVENTS]),
-                _guard_minimum(problem.system_id, p, times, states) if samples else math.nan, states, times, modes,
+                _guard_minimum(problem, p, times, states) if samples else math.nan, states, times, modes,
                 int(counters[driver.COUNT_ACCEPTED] + counters[driver.COUNT_REJECTED]),
                 log[log[:, driver.EVENT_GUARD] == 0, driver.EVENT_TIME].copy(),
                 math.nan if problem.clock is None else float(y[-1, problem.clock] - y0[problem.clock]))
 
 
-def _guard_minimum(system_id: int, p: np.ndarray, times: np.ndarray, states: np.ndarray) -> float:
+def _guard_minimum(problem: Problem, p: np.ndarray, times: np.ndarray, states: np.ndarray) -> float:
     """Smallest value of guard 0 over the sampled states, refined by the parabola through
     the smallest sample and its neighbours (error of order the sample spacing cubed)."""
     sampled = np.empty(times.size)
-    systems.guard_samples(system_id, p, times, np.ascontiguousarray(states), 0, sampled)
+    problem.engine().systems.guard_samples(problem.system_id, p, times, np.ascontiguousarray(states), 0, sampled)
     i = int(np.argmin(sampled))
     if 0 < i < sampled.size - 1:
         left, middle, right = sampled[i - 1], sampled[i], sampled[i + 1]
@@ -243,8 +246,9 @@ def shoot(problem: Problem, x, value: float, periods: int = 1) -> np.ndarray:
 
 
 def _plain(problem: Problem, p, period, x, value, t0, t1) -> np.ndarray:
-    y, _, _, counters = driver.integrate(problem.system_id, p, _full(problem, x, value), t0, t1,
-                                         np.array([t1]), problem.rtol, problem.atol, *_driver_settings(problem, period))
+    y, _, _, counters = problem.run(problem.system_id, p, _full(problem, x, value), t0, t1,
+                                    np.array([t1]), problem.rtol, problem.atol,
+                                    *_driver_settings(problem, period))
     limits.check_run(counters, f"shooting run at {problem.name} = {value:g}")
     return y[-1, :problem.unknowns].copy()
 
@@ -260,8 +264,8 @@ def transient_state(problem: Problem, periods: int = 50, value: float | None = N
     t0 = problem.t_start
     t1 = t0 + periods * period
     start = problem.full_state(problem.template[:problem.unknowns], value)
-    y, _, _, counters = driver.integrate(problem.system_id, p, start, t0, t1, np.array([t1]),
-                                         problem.rtol * 100, problem.atol * 100, *_driver_settings(problem, period))
+    y, _, _, counters = problem.run(problem.system_id, p, start, t0, t1, np.array([t1]),
+                                    problem.rtol * 100, problem.atol * 100, *_driver_settings(problem, period))
     limits.check_run(counters, "transient run")
     return y[-1, :problem.unknowns].copy()
 
@@ -386,9 +390,8 @@ def _segment_starts(problem: Problem, start, value: float, times: np.ndarray, tr
     if states.shape == (m, u):
         return states.copy()
     p, period = problem.build(value)
-    y, _, _, counters = driver.integrate(problem.system_id, p, _full(problem, states, value), times[0], times[-1],
-                                         times[:-1].copy(), problem.rtol, problem.atol,
-                                         *_driver_settings(problem, period))
+    y, _, _, counters = problem.run(problem.system_id, p, _full(problem, states, value), times[0], times[-1],
+                                    times[:-1].copy(), problem.rtol, problem.atol, *_driver_settings(problem, period))
     limits.check_run(counters, "run to the segments' starts")
     return y[:, :u].copy()
 
@@ -400,7 +403,7 @@ def _join(problem: Problem, p: np.ndarray, runs: list[Flow], matrix: np.ndarray)
     times = np.concatenate([runs[0].times] + [run.times[1:] for run in runs[1:]])
     modes = np.concatenate([runs[0].modes] + [run.modes[1:] for run in runs[1:]])
     return Flow(runs[-1].end, matrix, sum(run.impacts for run in runs), sum(run.events for run in runs),
-                _guard_minimum(problem.system_id, p, times, states), states, times, modes,
+                _guard_minimum(problem, p, times, states), states, times, modes,
                 contact_times=np.concatenate([run.contact_times for run in runs]),
                 elapsed=sum(run.elapsed for run in runs))
 

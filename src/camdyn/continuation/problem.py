@@ -13,17 +13,19 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from types import ModuleType
 
 import numpy as np
 
 from camdyn.errors import ParameterError
+from camdyn.integrator import driver as bundled_driver
 from camdyn.params.schema import parameter_index
 from camdyn.params.system import System
 from camdyn.simulation import limits
 from camdyn.simulation.runner import prepare
 from camdyn.systems import registry as systems
 
-__all__ = ["Problem", "model_problem", "system_problem", "parameter_unit", "FORCING_INDEX"]
+__all__ = ["Problem", "model_problem", "system_problem", "bound_problem", "parameter_unit", "FORCING_INDEX"]
 
 #: Index of the forcing frequency W [rad/s] in each test model's parameter vector.
 FORCING_INDEX = {systems.OSCILLATOR: 3, systems.RIGID_IMPACT: 3, systems.COUPLED_OSCILLATORS: 4}
@@ -73,6 +75,12 @@ class Problem:
         ``template_at(value) -> ndarray (n,)``: the template at the scalar parameter
         ``value``, for a model whose kept components depend on it (the cam's speed as a
         state of two followers on a cam held at that speed); None: ``template``.
+    driver : module or None
+        The driver that integrates the model: a protocol model's own
+        (:func:`bound_problem`); None: the bundled one (:mod:`camdyn.integrator.driver`).
+    step_fraction : float or None
+        Largest step and scan interval as fractions of the period [-]; None: those of
+        :func:`~camdyn.simulation.limits.step_limits`.
     """
 
     system_id: int
@@ -93,6 +101,16 @@ class Problem:
     matrix_atol: float | None = None
     template_at: Callable[[float], np.ndarray] | None = field(default=None, compare=False)
     clock: int | None = None
+    driver: ModuleType | None = field(default=None, compare=False)
+    step_fraction: float | None = None
+
+    def engine(self) -> ModuleType:
+        """The driver module that integrates this problem's model."""
+        return bundled_driver if self.driver is None else self.driver
+
+    def run(self, *args):
+        """``engine().integrate(*args)``: one run of the problem's model."""
+        return self.engine().integrate(*args)
 
     def full_state(self, x, value: float) -> np.ndarray:
         """The full state (n,) from the unknowns ``x`` at the scalar parameter ``value``:
@@ -227,3 +245,40 @@ def system_problem(system: System, key: str = "motion.speed", initial_state=None
     return Problem(systems.CAM_FOLLOWER, build, value, template, int(systems.controlled_size(systems.CAM_FOLLOWER)),
                    name=key, unit=str(unit), rtol=rtol, atol=atol, system=system, impact_sign=1.0, key=key,
                    matrix_rtol=100.0 * rtol, matrix_atol=100.0 * atol)
+
+
+def bound_problem(bound, key: str | None = None, t_start: float = 0.0, rtol: float = 1e-10,
+                  atol: float = 1e-12) -> Problem:
+    """A protocol model's periodic problem (:mod:`camdyn.systems.protocol`); the scalar
+    parameter is the model's parameter ``key`` (default its speed [Hz]), in its unit. The
+    forcing period is one over the speed; every state component is a shooting unknown,
+    the start the model's state at rest.
+
+    Raises
+    ------
+    ParameterError
+        A model without a speed parameter, or an unknown ``key``.
+    """
+    from camdyn.simulation.models import model_driver
+    from camdyn.systems.protocol import MODEL_ID, BoundModel
+
+    if not isinstance(bound, BoundModel):
+        raise ParameterError(f"expected a model with its parameters (Model.bind()), got {type(bound).__name__}")
+    model = bound.model
+    if model.speed is None:
+        raise ParameterError(f"model {model.name!r} has no speed parameter, so no forcing period to shoot over")
+    key = model.speed if key is None else key
+    if key not in model.parameter_names:
+        raise ParameterError(f"model {model.name!r} has no parameter {key!r}; its parameters: "
+                             f"{', '.join(model.parameter_names)}")
+    _check_tolerances(rtol, atol)
+    unit = model.parameters[model.parameter_names.index(key)].unit
+
+    def build(value: float) -> tuple[np.ndarray, float]:
+        moved = bound.replace({key: float(value)})
+        return moved.p, 1.0 / moved[model.speed]
+
+    unknowns = len(model.states) if model.controlled is None else int(model.controlled)
+    return Problem(MODEL_ID, build, float(bound[key]), bound.initial_state(), unknowns, name=key, unit=unit,
+                   t_start=float(t_start), rtol=rtol, atol=atol, impacts=False, key=key, driver=model_driver(model),
+                   step_fraction=model.max_step_fraction, matrix_rtol=10 * rtol, matrix_atol=10 * atol)

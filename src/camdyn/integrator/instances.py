@@ -4,10 +4,12 @@ The bundled driver (:mod:`camdyn.integrator.driver`) reaches its models through
 :mod:`camdyn.systems.registry`, a switch on integer ids compiled as a whole. A model
 described by a :class:`camdyn.systems.protocol.Model` (a user's model, written as numba
 functions outside the package) gets a driver of its own instead: the integrator's
-modules that call a model (:data:`MODEL_MODULES`) are written, unchanged but for their
-imports, into a package in camdyn's cache folder, beside a generated adapter module
-that gives the registry's functions for that one model
-(:func:`camdyn.systems.protocol.adapter_source`). numba compiles only that model's
+modules that call a model (:data:`MODEL_MODULES`), the registry and the variational
+system (:data:`SYSTEM_MODULES`) are written, unchanged but for their imports, into a
+package in camdyn's cache folder, beside a generated adapter module that stands for
+:mod:`camdyn.systems.models` with that one model
+(:func:`camdyn.systems.protocol.adapter_source`); the model's variational system
+(state-transition matrix, saltation at events, parameter sensitivities) comes with it. numba compiles only that model's
 code, inlines it as it inlines the bundled models', and caches it on disk: a second
 process loads it without compiling.
 
@@ -42,9 +44,13 @@ __all__ = ["MODEL_MODULES", "cache_root", "instance", "instance_key"]
 #: model; the others (counters, tableaus, linear algebra, tolerances, the inlining pass,
 #: the Ctrl-C poll) are shared.
 MODEL_MODULES = ("nordsieck", "steppers", "sampling", "crossings", "events", "multistep", "driver")
+#: The registry and the variational system (:mod:`camdyn.systems`), written again per
+#: model over the adapter, so that the model's variational system (state-transition
+#: matrix, saltation at events, parameter sensitivities) comes with its driver.
+SYSTEM_MODULES = ("variational", "registry")
 _HERE = Path(__file__).resolve().parent
-_REGISTRY_IMPORT = "from camdyn.systems import registry as systems"
-#: An import left pointing at the registry or at a bundled model-calling module.
+_SYSTEMS = _HERE.parent / "systems"
+#: An import left pointing at the bundled registry, models or model-calling modules.
 _STALE_IMPORT = re.compile(r"^\s*(?:from|import)\s+camdyn\.(?:systems|integrator\.(?:"
                            + "|".join(MODEL_MODULES) + r"))\b", re.MULTILINE)
 _LOCK = threading.Lock()
@@ -61,7 +67,9 @@ def cache_root() -> Path:
 
 
 def _integrator_sources() -> dict[str, str]:
-    return {name: (_HERE / f"{name}.py").read_text(encoding="utf-8") for name in MODEL_MODULES}
+    sources = {name: (_HERE / f"{name}.py").read_text(encoding="utf-8") for name in MODEL_MODULES}
+    sources.update({name: (_SYSTEMS / f"{name}.py").read_text(encoding="utf-8") for name in SYSTEM_MODULES})
+    return sources
 
 
 def instance_key(adapter: str, dependencies: tuple[str, ...] = ()) -> str:
@@ -79,8 +87,15 @@ def instance_key(adapter: str, dependencies: tuple[str, ...] = ()) -> str:
 
 
 def _rewrite(text: str, package: str) -> str:
-    """A model-calling module's source with its imports pointed at the instance package."""
-    text = text.replace(_REGISTRY_IMPORT, f"from {package} import adapter as systems")
+    """A module's source with its imports pointed at the instance package: the model's
+    adapter as the registry's ``models``, the package's own registry, variational system
+    and model-calling modules."""
+    text = text.replace("from camdyn.systems import registry as systems", f"from {package} import registry as systems")
+    text = text.replace("from camdyn.systems import models, variational",
+                        f"from {package} import adapter as models\nfrom {package} import variational")
+    text = text.replace("from camdyn.systems import models", f"from {package} import adapter as models")
+    text = text.replace("from camdyn.systems.models import", f"from {package}.adapter import")
+    text = text.replace("from camdyn.systems.variational import", f"from {package}.variational import")
     for name in MODEL_MODULES:
         text = re.sub(rf"\bfrom camdyn\.integrator\.{name} import\b", f"from {package}.{name} import", text)
     return text
@@ -97,7 +112,7 @@ def _write_package(folder: Path, package: str, adapter: str) -> None:
         for name, text in _integrator_sources().items():
             rewritten = _rewrite(text, package)
             if re.search(_STALE_IMPORT, rewritten):
-                raise RuntimeError(f"integrator/{name}.py reaches the registry other than by {_REGISTRY_IMPORT!r}")
+                raise RuntimeError(f"{name}.py imports the bundled models in a way instances.py does not rewrite")
             (staging / f"{name}.py").write_text(rewritten)
         try:
             os.rename(staging, folder)

@@ -17,7 +17,7 @@ from camdyn.integrator import driver as bundled
 from camdyn.integrator import instances
 from camdyn.params.units import parse_speed
 from camdyn.simulation import limits
-from camdyn.systems.protocol import BoundModel, adapter_source
+from camdyn.systems.protocol import MODEL_ID, BoundModel, adapter_source
 
 __all__ = ["simulate_model", "model_driver"]
 
@@ -116,10 +116,10 @@ def simulate_model(bound: BoundModel, speed=None, revolutions: float = 10.0, dur
     p = bound.p
     t_out = np.minimum(np.arange(n_out) / sample_rate, duration)
     start = _time.perf_counter()
+    scan = float(model.max_step_fraction * scale)
     y, modes, events, counters = limits.with_room_for_events(
-        lambda room: driver.integrate(0, p.copy(), y0.copy(), 0.0, float(duration), t_out, float(rtol), float(atol),
-                                      float(max_step), 0, int(max_steps), room, True, float(model.max_step_fraction
-                                                                                          * scale)),
+        lambda room: driver.integrate(MODEL_ID, p.copy(), y0.copy(), 0.0, float(duration), t_out, float(rtol),
+                                      float(atol), float(max_step), 0, int(max_steps), room, True, scan),
         int(64 + _EVENTS_PER_PERIOD * duration / scale))
     elapsed = _time.perf_counter() - start
     limits.check_run(counters, f"the simulation of {model.name!r}")
@@ -133,7 +133,7 @@ def _dataset(bound, driver, t_out, y, modes, events, counters, elapsed, period, 
         data[q.name] = ("time", y[:, i], {"units": q.unit, "long_name": q.description or q.name})
     if model.outputs:
         out = np.full((t_out.shape[0], len(model.outputs)), np.nan)
-        driver.systems.output_samples(t_out, y, modes, bound.p, out)
+        driver.systems.models.output_samples(t_out, y, modes, bound.p, out)
         for i, q in enumerate(model.outputs):
             data[q.name] = ("time", out[:, i], {"units": q.unit, "long_name": q.description or q.name})
     for i, name in enumerate(model.modes):

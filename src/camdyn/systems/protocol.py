@@ -21,11 +21,14 @@ functions (``@numba.njit``) defined at the top level of a module file:
 ``initial_mode(t, y, p, mode)``
     the mode of a state at the start;
 ``jacobian(t, y, f0, mode, p, jac)`` (optional)
-    ``d f / d y`` into the ``n x n`` array ``jac``; forward differences without it;
+    ``d f / d y`` into the ``n x n`` array ``jac``; central differences without it;
 ``monitor(t, y, mode, p)`` (optional)
     a scalar whose largest value between events is logged (an impact's peak force);
 ``outputs(t, y, mode, p, out)`` (optional)
-    derived channels (:attr:`Model.outputs`) of one state into ``out``.
+    derived channels (:attr:`Model.outputs`) of one state into ``out``;
+``regime(mode, p)`` (optional)
+    0 or 1, the dynamic regime of a mode (free flight, contact): the driver starts the
+    step after an event at the last step size of the new mode's regime; 0 without it.
 
 :func:`adapter_source` writes the module through which the integrator calls them;
 :mod:`camdyn.integrator.instances` compiles the integrator for the model, and
@@ -39,16 +42,22 @@ import importlib
 import inspect
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from camdyn.errors import ParameterError
 
-__all__ = ["Model", "BoundModel", "Quantity", "adapter_source", "REQUIRED", "OPTIONAL"]
+#: The id under which a model's own driver knows it (below the registry's
+#: ``VARIATIONAL``; its variational system is ``VARIATIONAL + MODEL_ID``). The adapter
+#: ignores it; it keeps the bundled models' id-keyed traits off protocol models.
+MODEL_ID = 99
+
+__all__ = ["Model", "BoundModel", "Quantity", "MODEL_ID", "adapter_source", "REQUIRED", "OPTIONAL"]
 
 #: The functions a model must give, and those it may give.
 REQUIRED = ("rhs", "guards", "expected_sign", "transition", "initial_mode")
-OPTIONAL = ("jacobian", "monitor", "outputs")
+OPTIONAL = ("jacobian", "monitor", "outputs", "regime")
 #: Stepper codes of the driver (``camdyn.integrator.driver.METHOD_*``) a model may prefer.
 _METHODS = {"dop853": 3, "dormand-prince": 1, "rodas4": 2}
 
@@ -129,6 +138,10 @@ class Model:
         The stepper: ``"dop853"`` (default), ``"dormand-prince"`` or ``"rodas4"``.
     max_step_fraction : float
         The largest step as a fraction of the period (1 / ``speed``) [-].
+    plain_error_estimate : bool
+        Control DOP853's steps by their 5th-order error estimate alone, not Hairer's
+        combination with the 3rd-order one (for a force with a branch point at
+        separation, such as Hertz's; docs/integrator.md).
     initial_state : callable, optional
         ``initial_state(p) -> y0``: the state at rest for the parameter vector ``p``
         (SI units); zeros without it.
@@ -145,6 +158,7 @@ class Model:
     controlled: int | None = None
     method: str = "dop853"
     max_step_fraction: float = 1.0 / 32.0
+    plain_error_estimate: bool = False
     initial_state: object = field(default=None, repr=False)
 
     def __post_init__(self):
@@ -215,7 +229,13 @@ class Model:
 
     def dependencies(self) -> tuple[str, ...]:
         """The source files of the modules that define the model's functions."""
-        return tuple(sorted({_source_of(self.name, role, f)[2] for role, f in self.functions.items()}))
+        files = {_source_of(self.name, role, f)[2] for role, f in self.functions.items()}
+        package = Path(__file__).resolve().parents[1]
+        if any(Path(f).resolve().is_relative_to(package) for f in files):
+            # a bundled model: its functions call camdyn's physics, which numba's cache
+            # does not follow
+            files |= {str(f) for folder in ("model", "systems") for f in (package / folder).glob("*.py")}
+        return tuple(sorted(files))
 
 
 def _parse(value, q: Quantity) -> float:
@@ -302,22 +322,30 @@ def adapter_source(model: Model) -> str:
     controlled = n if model.controlled is None else int(model.controlled)
     jacobian = ("    _jacobian(t, y, f0, mode, p, jac)\n" if "jacobian" in model.functions else _DIFFERENCE_JACOBIAN)
     monitor = ("    return _monitor(t, y, mode, p)\n" if "monitor" in model.functions else "    return 0.0\n")
+    regime = ("    return _regime(mode, p)\n" if "regime" in model.functions else "    return 0\n")
     text = _ADAPTER.format(name=model.name, imports="\n".join(imports), n=n, controlled=controlled,
                            m=len(model.guards), modes=len(model.modes), method=_METHODS[model.method],
-                           jacobian=jacobian, monitor=monitor)
+                           jacobian=jacobian, monitor=monitor, regime=regime,
+                           model_id=MODEL_ID,
+                           plain_id=MODEL_ID if model.plain_error_estimate else -1)
     return text + (_OUTPUT_SAMPLES if "outputs" in model.functions else "")
 
 
 _DIFFERENCE_JACOBIAN = """\
+    # central differences: their noise is far below forward differences', which the
+    # variational system's error control on the state-transition matrix would chase
     n = y.shape[0]
     yh = y.copy()
-    fh = np.empty(n)
+    fp = np.empty(n)
+    fm = np.empty(n)
     for j in range(n):
-        h = 1.4901161193847656e-08 * max(abs(y[j]), 1e-6)
+        h = 6.0554544523933395e-06 * max(abs(y[j]), 1e-6)   # cube root of the machine epsilon
         yh[j] = y[j] + h
-        _rhs(t, yh, mode, p, fh)
+        _rhs(t, yh, mode, p, fp)
+        yh[j] = y[j] - h
+        _rhs(t, yh, mode, p, fm)
         for i in range(n):
-            jac[i, j] = (fh[i] - f0[i]) / h
+            jac[i, j] = (fp[i] - fm[i]) / (2.0 * h)
         yh[j] = y[j]
 """
 
@@ -335,6 +363,12 @@ import numba
 import numpy as np
 
 {imports}
+
+# the registry's model ids: this model is {model_id}; CAM_FOLLOWER marks whether DOP853's
+# steps are controlled by their 5th-order estimate alone (registry.plain_error_estimate)
+CAM_FOLLOWER = {plain_id}
+OSCILLATOR = RIGID_IMPACT = COUPLED_OSCILLATORS = TRANSLATING_FOLLOWER = STICK_SLIP = DRIVEN_CAM = -2
+FLEXIBLE_PIVOT = TWO_FOLLOWERS = SLIDING_FOLLOWER = DRIVEN_CAM_ANGLE = TWO_FOLLOWERS_ANGLE = -2
 
 
 @numba.njit(cache=True)
@@ -372,6 +406,21 @@ def jacobian(system, t, y, f0, mode, p, jac):
 {jacobian}
 
 @numba.njit(cache=True)
+def variational_jacobian(system, t, y, f0, mode, p, jac):
+    jacobian(system, t, y, f0, mode, p, jac)
+
+
+@numba.njit(cache=True)
+def carried_slot(system, p):
+    return -1
+
+
+@numba.njit(cache=True)
+def carries(system):
+    return False
+
+
+@numba.njit(cache=True)
 def guards(system, t, y, f, known, p, values, rates):
     _guards(t, y, f, known, p, values, rates)
 
@@ -393,17 +442,11 @@ def initial_mode(system, t, y, p, mode):
 
 @numba.njit(cache=True)
 def regime(system, mode, p):
-    return 0
-
+{regime}
 
 @numba.njit(cache=True)
 def preferred_method(system, mode, p):
     return {method}
-
-
-@numba.njit(cache=True)
-def plain_error_estimate(system):
-    return False
 
 
 @numba.njit(cache=True)
