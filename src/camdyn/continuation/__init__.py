@@ -1,6 +1,7 @@
 """Periodic orbits of the forced hybrid systems, their Floquet multipliers, and their
 continuation in a parameter with bifurcation detection (:mod:`.orbits`, :mod:`.branches`;
-the problem definitions in :mod:`.problem`, a protocol model's too (:func:`bound_problem`), the cam-follower's contact margins in
+the problem definitions in :mod:`.problem`, a protocol model's too
+(:func:`bound_problem`), the cam-follower's contact margins in
 :mod:`.margins`, branch switching at a period doubling in :mod:`.switching`, the
 cam-follower's branches and their tables in :mod:`.results`, the translating follower's
 problem, branches and table in :mod:`.translating`, the problem and branches of the
@@ -14,6 +15,7 @@ from camdyn.continuation.results import trace_branch
 from camdyn.continuation.switching import doubled_orbit, switch_branch
 from camdyn.continuation.translating import trace_translating, translating_dataset, translating_problem
 
-__all__ = ["Bifurcation", "Branch", "Orbit", "Problem", "bound_problem", "continue_orbits", "doubled_orbit", "find_orbit", "flow",
+__all__ = ["Bifurcation", "Branch", "Orbit", "Problem", "bound_problem",
+           "continue_orbits", "doubled_orbit", "find_orbit", "flow",
            "mechanism_problem", "model_problem", "switch_branch", "system_problem", "trace_branch", "trace_mechanism",
            "trace_translating", "transient_state", "translating_dataset", "translating_problem"]
