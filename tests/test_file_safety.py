@@ -468,3 +468,40 @@ def test_full_disk_in_the_api_leaves_nothing_to_crash_at_exit(tiny_disk, tmp_pat
     assert proc.stderr == ""
     assert list(tiny_disk.iterdir()) == []
 
+
+
+_SWEEP_ON_A_FULL_DISK = """
+import gc, os, sys
+from camdyn.errors import StorageError
+from camdyn.sweeps import load_spec, run_sweep, store
+
+disk = sys.argv[2]
+assemble = store.Checkpoint.assemble
+
+def fill_then_assemble(self, keep_parts=False):
+    # the parts are on disk: fill it but for 4 kB, then write the result (HDF5, streamed)
+    st = os.statvfs(disk)
+    with open(os.path.join(disk, "filler"), "wb") as fh:
+        fh.write(bytes(max(st.f_bavail * st.f_frsize - 4096, 0)))
+    return assemble(self, keep_parts)
+
+store.Checkpoint.assemble = fill_then_assemble
+try:
+    run_sweep(load_spec(sys.argv[1]), workers=0, progress=False)
+except StorageError as exc:
+    print("caught", exc)
+gc.collect()
+print("collected")
+"""
+
+
+def test_full_disk_while_a_sweep_streams_its_result_is_an_error_not_a_segfault(tiny_disk, tmp_path):
+    spec = _spec(tmp_path, output=tiny_disk / "s.nc")
+    proc = subprocess.run([sys.executable, "-c", _SWEEP_ON_A_FULL_DISK, str(tmp_path / "s.toml"), str(tiny_disk)],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    caught, collected = proc.stdout.splitlines()
+    assert caught.startswith(f"caught cannot write {spec.output}: the disk is full (") and collected == "collected"
+    assert proc.stderr == ""
+    # the parts stay for a resume; no result, temporary or lock
+    assert sorted(p.name for p in tiny_disk.iterdir()) == ["filler", "s.nc.parts"]

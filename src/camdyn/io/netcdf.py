@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import os
 from pathlib import Path
 
@@ -10,7 +11,7 @@ import xarray as xr
 from camdyn.errors import PresetError
 from camdyn.io.atomic import atomic_output
 
-__all__ = ["save_netcdf", "load_netcdf", "write_netcdf"]
+__all__ = ["save_netcdf", "load_netcdf", "write_netcdf", "GuardedFile"]
 
 
 def write_netcdf(ds: xr.Dataset, path: str | Path) -> None:
@@ -33,6 +34,76 @@ def write_netcdf(ds: xr.Dataset, path: str | Path) -> None:
             view = view[os.write(fd, view):]
     finally:
         os.close(fd)
+
+
+class GuardedFile(io.RawIOBase):
+    """A file for HDF5 (``h5netcdf.File(GuardedFile(path), "w")``) that never tells HDF5
+    a write failed, for files too large to build in memory (:func:`write_netcdf`).
+
+    HDF5 left to fail a write on a full disk ends in a segmentation fault (see
+    :func:`write_netcdf`). Here the first failed write is kept in :attr:`error` and the
+    later writes are dropped (reported as done), so that HDF5 finishes and closes its file
+    normally; the caller then calls :meth:`check`, which raises that error, and discards
+    the file. ``path`` exists already (a temporary of :func:`camdyn.io.atomic.atomic_output`)
+    and is opened without following a link.
+    """
+
+    def __init__(self, path: str | Path):
+        super().__init__()
+        self._fd = os.open(path, os.O_RDWR | os.O_NOFOLLOW)
+        self.error: OSError | None = None
+
+    def readable(self) -> bool:
+        return True
+
+    def writable(self) -> bool:
+        return True
+
+    def seekable(self) -> bool:
+        return True
+
+    def seek(self, offset: int, whence: int = os.SEEK_SET) -> int:
+        return os.lseek(self._fd, offset, whence)
+
+    def tell(self) -> int:
+        return os.lseek(self._fd, 0, os.SEEK_CUR)
+
+    def readinto(self, buffer) -> int:
+        data = os.read(self._fd, len(buffer))
+        buffer[:len(data)] = data
+        return len(data)
+
+    def write(self, data) -> int:
+        view = memoryview(data).cast("B")
+        size = len(view)
+        if self.error is None:
+            try:
+                while view:
+                    view = view[os.write(self._fd, view):]
+                return size
+            except OSError as exc:
+                self.error = exc
+        os.lseek(self._fd, len(view), os.SEEK_CUR)   # dropped: the file is discarded anyway
+        return size
+
+    def truncate(self, size: int | None = None) -> int:
+        size = self.tell() if size is None else size
+        if self.error is None:
+            try:
+                os.ftruncate(self._fd, size)
+            except OSError as exc:
+                self.error = exc
+        return size
+
+    def close(self) -> None:
+        if not self.closed:
+            os.close(self._fd)
+        super().close()
+
+    def check(self) -> None:
+        """Raise the first write's error, if one failed."""
+        if self.error is not None:
+            raise self.error
 
 
 def save_netcdf(ds: xr.Dataset, path: str | Path) -> Path:

@@ -32,6 +32,7 @@ import numpy as np
 from camdyn import __version__
 from camdyn.errors import OutputError, ParameterError
 from camdyn.io.atomic import atomic_output, remove_stale, write_text
+from camdyn.io.netcdf import GuardedFile
 from camdyn.sweeps import metrics as M
 from camdyn.sweeps.spec import METRICS, SweepSpec
 
@@ -177,10 +178,20 @@ class Checkpoint:
         if missing:
             raise ParameterError(f"cannot assemble {spec.output}: {len(missing)} chunks are missing")
         out = Path(spec.output)
+        with atomic_output(out) as tmp, GuardedFile(tmp) as sink:
+            self._write_result(sink)
+            sink.check()   # a full disk: raised now, with HDF5's file closed normally
+        if not keep_parts:
+            shutil.rmtree(self.folder, ignore_errors=True)
+        return out
+
+    def _write_result(self, sink) -> None:
+        """Write the result file into ``sink`` (a :class:`camdyn.io.netcdf.GuardedFile`)."""
+        spec = self.spec
         kept = spec.kept_revolutions
         layout = _layout(spec)
         dims = [d for d, _ in spec.dimensions]
-        with atomic_output(out) as tmp, h5netcdf.File(tmp, "w") as f:
+        with h5netcdf.File(sink, "w") as f:
             sizes = dict(spec.dimensions)
             if "poincare" in spec.metrics:
                 sizes["revolution"] = kept
@@ -208,9 +219,6 @@ class Checkpoint:
                 for name, var in variables.items():
                     _write_rows(var, block[name], start, spec.shape)
             f.attrs.update(_global_attributes(spec))
-        if not keep_parts:
-            shutil.rmtree(self.folder, ignore_errors=True)
-        return out
 
 
     def _blocks(self):
