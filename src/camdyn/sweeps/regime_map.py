@@ -20,6 +20,7 @@ import xarray as xr
 from camdyn.analysis.kinematics import inverse_kinematics, loss_of_contact_speed
 from camdyn.errors import CamdynError, ParameterError
 from camdyn.io.atomic import atomic_output
+from camdyn.io.netcdf import write_netcdf
 from camdyn.sweeps.spec import SweepSpec
 
 __all__ = ["KINEMATIC_REGIMES", "kinematic_regimes", "loss_of_contact_curve", "boundary_agreement",
@@ -114,7 +115,7 @@ def regime_map(spec: SweepSpec, **run) -> xr.Dataset:
         ds["loss_of_contact_speed"] = curve
     ds.attrs.update({f"agreement_{k}": v for k, v in boundary_agreement(ds).items()})
     with atomic_output(spec.output, int(ds.nbytes)) as tmp:
-        ds.to_netcdf(tmp, engine="h5netcdf")
+        write_netcdf(ds, tmp)   # built in memory: a full disk cannot crash HDF5
     return ds
 
 
@@ -155,5 +156,5 @@ def map_curves(spec: SweepSpec, ds: xr.Dataset, requests: list[tuple[str, float]
             attrs={"long_name": f"{kind} by two-parameter continuation", "units": second.unit,
                    "curve_kind": kind, "stopped": curve.stopped})
     with atomic_output(spec.output, int(ds.nbytes)) as tmp:
-        ds.to_netcdf(tmp, engine="h5netcdf")
+        write_netcdf(ds, tmp)   # built in memory: a full disk cannot crash HDF5
     return ds
