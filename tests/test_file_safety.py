@@ -452,6 +452,16 @@ def test_full_disk_during_a_netcdf_write_is_one_line_not_a_segfault(tiny_disk, t
     assert sorted(p.name for p in tiny_disk.iterdir()) == ["old.nc"]
 
 
+def test_full_disk_while_writing_a_netcdf_record_is_one_line_not_a_segfault(tiny_disk, tmp_path):
+    out = tiny_disk / "meas.nc"
+    proc = _camdyn("synthesize", "sundar2014-friction", "--set", "cam.runout=1.75mm", "--speed", "11.55Hz",
+                   "--revolutions", "200", "--sample-rate", "10kHz", "--out", str(out), cwd=tmp_path)
+    assert proc.returncode == 1, proc.stderr[-2000:]
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: cannot write {out}: the disk is full"), lines[:5]
+    assert list(tiny_disk.iterdir()) == []
+
+
 def test_full_disk_in_the_api_leaves_nothing_to_crash_at_exit(tiny_disk, tmp_path):
     # the same in Python: the error is raised, and collecting garbage and leaving the
     # interpreter afterwards (where the crash used to happen) end normally
