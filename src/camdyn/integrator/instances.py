@@ -148,5 +148,30 @@ def instance(adapter: str, dependencies: tuple[str, ...] = ()) -> ModuleType:
         if str(root) not in sys.path:
             sys.path.append(str(root))
         driver = importlib.import_module(f"{package}.driver")
+        _compile_once(driver, root / f".{package}.lock")
         _LOADED[package] = driver
         return driver
+
+
+#: The argument types of ``integrate`` as every caller passes them (one tolerance for
+#: every component): compiled, or loaded from the cache, when the driver is first asked for.
+SIGNATURE = "(int64, float64[::1], float64[::1], float64, float64, float64[::1], float64, float64, float64, int64, " \
+            "int64, int64, boolean, float64)"
+
+
+def _compile_once(driver: ModuleType, lock: Path) -> None:
+    """Compile (or load from numba's cache) the driver's usual signature while holding
+    ``lock``, so that processes that ask for the same new driver at once (workers, test
+    processes) compile it once: the others wait, then load it from the cache."""
+    import fcntl
+
+    try:
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o600)
+    except OSError:   # a read-only cache folder, or something planted at the lock's name
+        driver.integrate.compile(SIGNATURE)
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        driver.integrate.compile(SIGNATURE)
+    finally:
+        os.close(fd)
