@@ -412,7 +412,7 @@ def test_too_many_impacts_are_counted_in_the_message():
     acc = np.random.default_rng(0).normal(0.0, 1.0, t.size)
     for at in (0.3, 0.9, 1.5):                     # three impacts
         acc[int(at * rate):int(at * rate) + 20] += 1000.0
-    with pytest.raises(IdentificationError, match=r"found 3 impacts in 2 revolutions: that is 1\.50 a revolution; "
+    with pytest.raises(IdentificationError, match=r"found 3 impacts in 2 revolutions, 1\.50 impacts per revolution; "
                                                   r"the estimator needs exactly one impact per revolution, because"):
         _periodic_contacts(t, acc, speed, 1, 0)
 

@@ -302,11 +302,12 @@ def _periodic_contacts(t: np.ndarray, acc: np.ndarray, speed: float, min_impacts
     per_rev = starts.size / revolutions
     intervals = np.diff(starts) * tau / period
     if per_rev > 1.3 or np.median(intervals) < 0.75:
-        why = (f"that is {per_rev:.2f} a revolution" if per_rev > 1.3 else
-               f"half of the intervals between them are shorter than 0.75 cam periods (median "
-               f"{np.median(intervals):.3g}, shortest {intervals.min():.3g}): a double impact or chatter")
+        why = (f"{per_rev:.2f} impacts per revolution" if per_rev > 1.3 else
+               f"{per_rev:.2f} impacts per revolution, but half of the intervals between them are shorter than "
+               f"0.75 cam periods (median {np.median(intervals):.3g}, shortest {intervals.min():.3g}): a double "
+               f"impact or chatter")
         raise IdentificationError(
-            f"found {starts.size} impacts in {revolutions:.3g} revolutions: {why}; the estimator needs exactly one "
+            f"found {starts.size} impacts in {revolutions:.3g} revolutions, {why}; the estimator needs exactly one "
             "impact per revolution, because it reconstructs each impact from the free flight of the cam period "
             "before it; change the speed or runout")
     spread = float(intervals.max() - intervals.min())
