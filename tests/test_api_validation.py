@@ -1,4 +1,4 @@
-"""Input checked before work (issue 40): the Python API raises camdyn's own exceptions,
+"""Input checked before work: the Python API raises camdyn's own exceptions,
 with a message that says what was expected, for values of the wrong kind, limits that
 would hang or exhaust memory, and values outside their meaning; the command line
 refuses the same with exit status 2 and one line ``error: ...``. Each check runs before

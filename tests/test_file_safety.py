@@ -1,4 +1,4 @@
-"""Files in a shared folder, a full disk and concurrent writers (issue 40).
+"""Files in a shared folder, a full disk and concurrent writers.
 
 Each test plants or provokes one hazard and asserts what is on disk afterwards: a symbolic
 link planted at a temporary, probe or lock name is never written through; a replaced file
