@@ -36,6 +36,7 @@ from camdyn.params.profiles import SCHEMA as PROFILE_SCHEMA
 from camdyn.params.profiles import TranslatingSpec, list_translating_presets
 from camdyn.params.schema import Parameter, groups, parameter_index, parameters
 from camdyn.params.system import System
+from camdyn.params.toml_text import MAX_TOML_CHARS, MAX_TOML_DEPTH, flatten, loads_toml
 from camdyn.params.units import parse_quantity, parse_speed
 
 __all__ = [
@@ -43,13 +44,6 @@ __all__ = [
     "beta_unit", "convert_value", "unknown_key_error", "read_table", "system_from_toml", "system_to_toml",
     "parse_assignments", "PROFILE_KEYS", "read_system", "loads_toml", "MAX_TOML_DEPTH", "MAX_TOML_CHARS",
 ]
-
-#: Deepest nesting of tables, arrays and inline tables a TOML file camdyn reads may have
-#: [-] (camdyn's own files nest three deep; Python's TOML parser recurses once per level).
-MAX_TOML_DEPTH = 32
-#: Longest TOML file camdyn reads [characters]: a configuration or sweep spec is a few
-#: kilobytes; 10 MB is no configuration.
-MAX_TOML_CHARS = 10_000_000
 
 #: Every parameter of a :class:`~camdyn.params.system.System`, in the dataclasses' order.
 PARAMETERS: tuple[Parameter, ...] = parameters(System)
@@ -75,42 +69,6 @@ def beta_unit(law: str, exponent: float) -> str:
     power-law exponent ``n`` = ``exponent`` [-] (docs/model.md §3.4; the law's row of
     :data:`camdyn.params.laws.TABLE`)."""
     return lookup(law).unit_of_beta(exponent)
-
-
-def loads_toml(text: str, source="TOML") -> dict:
-    """``tomllib.loads(text)`` bounded: a text longer than :data:`MAX_TOML_CHARS` or
-    nested deeper than :data:`MAX_TOML_DEPTH` levels is refused with a
-    :class:`ParameterError` naming ``source`` (``tomllib.TOMLDecodeError`` passes to the
-    caller)."""
-    deep = ParameterError(f"{source}: TOML nested deeper than {MAX_TOML_DEPTH} levels (tables, arrays and "
-                          f"inline tables inside one another); a configuration nests a few levels")
-    if len(text) > MAX_TOML_CHARS:
-        raise ParameterError(f"{source}: {len(text)} characters of TOML is more than the {MAX_TOML_CHARS} a "
-                             f"configuration may have")
-    try:
-        table = tomllib.loads(text)
-    except RecursionError:
-        raise deep from None
-    stack = [(table, 1)]
-    while stack:
-        value, depth = stack.pop()
-        if depth > MAX_TOML_DEPTH:
-            raise deep
-        items = value.values() if isinstance(value, dict) else value
-        stack.extend((item, depth + 1) for item in items if isinstance(item, (dict, list)))
-    return table
-
-
-def flatten(table: dict, prefix: str = "") -> dict:
-    """Flatten nested TOML tables into dotted keys."""
-    out = {}
-    for key, value in table.items():
-        dotted = f"{prefix}{key}"
-        if isinstance(value, dict):
-            out.update(flatten(value, dotted + "."))
-        else:
-            out[dotted] = value
-    return out
 
 
 def read_toml_file(source: str | Path) -> dict:

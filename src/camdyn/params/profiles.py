@@ -42,6 +42,7 @@ from pathlib import Path
 
 from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyError
 from camdyn.params.follower_friction import FRICTION_SCHEMA, check_friction
+from camdyn.params.toml_text import flatten, loads_toml
 from camdyn.params.units import parse_quantity, parse_speed, registry
 
 __all__ = ["SCHEMA", "SEGMENT_KEYS", "ARC_KEYS", "PROFILE_KINDS", "FACES", "CONTACT_LAWS", "HERTZ_DAMPING_LAWS",
@@ -397,23 +398,12 @@ def spec_from_table(flat: dict, name: str = "custom", citation: str = "", folder
         roller_inertia=v["friction.roller_inertia"], **{key.split(".")[1]: v[key] for key in HERTZ_KEYS}, **extra)
 
 
-def _flatten(table: dict, prefix: str = "") -> dict:
-    """Nested TOML tables as dotted keys (lists of tables stay lists)."""
-    out = {}
-    for key, value in table.items():
-        if isinstance(value, dict):
-            out.update(_flatten(value, f"{prefix}{key}."))
-        else:
-            out[f"{prefix}{key}"] = value
-    return out
-
-
 def list_translating_presets() -> list[str]:
     """Names of the bundled presets whose ``[follower]`` is translating."""
     folder = resources.files("camdyn.params.presets")
     names = []
     for item in folder.iterdir():
-        if item.name.endswith(".toml") and _declares_translating(item.read_text(encoding="utf-8")):
+        if item.name.endswith(".toml") and _kind_in(item.read_text(encoding="utf-8")) == TRANSLATING:
             names.append(item.name[:-5])
     return sorted(names)
 
@@ -426,20 +416,14 @@ def translating_preset_text(name: str) -> str:
     return resources.files("camdyn.params.presets").joinpath(f"{name}.toml").read_text(encoding="utf-8")
 
 
-def _loads(text: str, source) -> dict:
-    """:func:`camdyn.params.config.loads_toml`: TOML of bounded depth and size (imported
-    here, since that module imports this one)."""
-    from camdyn.params.config import loads_toml
-
-    return loads_toml(text, source)
-
-
-def _declares_translating(text: str) -> bool:
+def _kind_in(text: str, source="TOML") -> str | None:
+    """The ``[follower] kind`` TOML text declares (None without one, or where not TOML)."""
     try:
-        follower = _loads(text, "TOML").get("follower", {})
+        follower = loads_toml(text, source).get("follower", {})
     except tomllib.TOMLDecodeError:
-        return False
-    return isinstance(follower, dict) and follower.get("kind") == TRANSLATING
+        return None
+    kind = follower.get("kind") if isinstance(follower, dict) else None
+    return None if kind is None else str(kind)
 
 
 def _source_text(source: str | Path) -> tuple[str, str, Path | None]:   # (text, name, folder of relative paths)
@@ -461,11 +445,9 @@ def declared_kind(source: str | Path) -> str | None:
     """The ``[follower] kind`` a TOML file declares (None without one, or where unreadable)."""
     path = Path(str(source))
     try:
-        follower = _loads(path.read_text(encoding="utf-8"), source).get("follower", {}) if path.is_file() else {}
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return _kind_in(path.read_text(encoding="utf-8"), source) if path.is_file() else None
+    except (OSError, UnicodeDecodeError):
         return None
-    kind = follower.get("kind") if isinstance(follower, dict) else None
-    return None if kind is None else str(kind)
 
 
 def is_translating(source: str | Path) -> bool:
@@ -475,7 +457,7 @@ def is_translating(source: str | Path) -> bool:
         return True
     path = Path(str(source))
     try:
-        return path.is_file() and _declares_translating(path.read_text(encoding="utf-8"))
+        return path.is_file() and _kind_in(path.read_text(encoding="utf-8")) == TRANSLATING
     except (OSError, UnicodeDecodeError):
         return False
 
@@ -496,10 +478,10 @@ def read_translating(source: str | Path, overrides: dict | None = None) -> Trans
     """
     text, name, folder = _source_text(source)
     try:
-        table = _loads(text, source)
+        table = loads_toml(text, source)
     except tomllib.TOMLDecodeError as exc:
         raise PresetError(f"{source}: not valid TOML ({exc})") from None
-    flat = _flatten(table)
+    flat = flatten(table)
     for key, value in (overrides or {}).items():
         if key not in SCHEMA:
             raise _unknown(key, SCHEMA)
