@@ -101,13 +101,8 @@ def simulate_model(bound: BoundModel, speed=None, revolutions: float = 10.0, dur
     channels = len(model.states) + len(model.outputs) + len(model.modes)
     limits.check_memory(limits.result_bytes(n_out, channels), "the simulation's result")
     scale = period if math.isfinite(period) else duration
-    if max_step is None:
-        max_step = model.max_step_fraction * scale
-    max_step = limits.check_number("max_step", max_step, "s")
-    if not (math.isfinite(max_step) and max_step > 0):
-        raise ParameterError(f"max_step must be a positive number of seconds, got {max_step!r}")
-    if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) or not 0 < max_steps < 2 ** 62:
-        raise ParameterError(f"max_steps must be a positive integer below 2**62, got {max_steps!r}")
+    max_step, max_steps = limits.check_steps(model.max_step_fraction * scale if max_step is None else max_step,
+                                             max_steps, duration)
     y0 = bound.initial_state() if initial_state is None else np.asarray(initial_state, dtype=float)
     if y0.shape != (len(model.states),) or not np.all(np.isfinite(y0)):
         raise ParameterError(f"initial_state must be {len(model.states)} finite numbers "
