@@ -22,8 +22,10 @@ from camdyn.integrator import driver as bundled_driver
 from camdyn.params.schema import parameter_index
 from camdyn.params.system import System
 from camdyn.simulation import limits
+from camdyn.simulation.models import model_driver
 from camdyn.simulation.runner import prepare
 from camdyn.systems import registry as systems
+from camdyn.systems.protocol import MODEL_ID, BoundModel
 
 __all__ = ["Problem", "model_problem", "system_problem", "bound_problem", "parameter_unit", "FORCING_INDEX"]
 
@@ -259,9 +261,6 @@ def bound_problem(bound, key: str | None = None, t_start: float = 0.0, rtol: flo
     ParameterError
         A model without a speed parameter, or an unknown ``key``.
     """
-    from camdyn.simulation.models import model_driver
-    from camdyn.systems.protocol import MODEL_ID, BoundModel
-
     if not isinstance(bound, BoundModel):
         raise ParameterError(f"expected a model with its parameters (Model.bind()), got {type(bound).__name__}")
     model = bound.model
