@@ -379,3 +379,18 @@ def test_checker_conflict_markers(text, lines):
 ])
 def test_checker_undocumented_modules(page, missing):
     assert undocumented_modules(page, {"io": ["atomic.py", "netcdf.py"]}) == missing
+
+
+def readme_missing_folders(readme: str, folders: list[str]) -> list[str]:
+    """Folders of the package that the README's layout table has no row for (a row
+    starts ``| `folder/` |``)."""
+    return [folder for folder in folders if f"\n| `{folder}/` |" not in readme]
+
+
+def test_readme_layout_names_every_folder():
+    folders = sorted(p.name for p in (SRC / PACKAGE).iterdir() if p.is_dir() and p.name != "__pycache__")
+    assert readme_missing_folders((ROOT / "README.md").read_text(encoding="utf-8"), folders) == []
+
+
+def test_checker_readme_missing_folders():
+    assert readme_missing_folders("x\n| `io/` | files |\n", ["io", "cli"]) == ["cli"]
