@@ -47,6 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from camdyn.errors import ParameterError
+from camdyn.params.units import parse_quantity, parse_speed
 
 #: The id under which a model's own driver knows it (below the registry's
 #: ``VARIATIONAL``; its variational system is ``VARIATIONAL + MODEL_ID``). The adapter
@@ -239,8 +240,6 @@ class Model:
 
 
 def _parse(value, q: Quantity) -> float:
-    from camdyn.params.units import parse_quantity, parse_speed
-
     if isinstance(value, bool):
         raise ParameterError(f"parameter {q.name!r} [{q.unit}]: expected a number or text with units, got {value!r}")
     if isinstance(value, (int, float, np.floating, np.integer)):
