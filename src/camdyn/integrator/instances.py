@@ -9,15 +9,15 @@ system (:data:`SYSTEM_MODULES`) are written, unchanged but for their imports, in
 package in camdyn's cache folder, beside a generated adapter module that stands for
 :mod:`camdyn.systems.models` with that one model
 (:func:`camdyn.systems.protocol.adapter_source`); the model's variational system
-(state-transition matrix, saltation at events, parameter sensitivities) comes with it. numba compiles only that model's
-code, inlines it as it inlines the bundled models', and caches it on disk: a second
+(state-transition matrix, saltation at events, parameter sensitivities) comes with it.
+numba compiles only that model's code, inlines it as it inlines the bundled models', and caches it on disk: a second
 process loads it without compiling.
 
 The package's name is a hash of the integrator's source, the adapter and the model's
 own module sources, so a change to any of them compiles a new driver instead of loading
 a stale one (numba's cache does not follow changes in called functions' modules).
 
-Measured (docs/user-models.md): numba caches neither a closure over the model's
+Measured (docs/design-notes.md): numba caches neither a closure over the model's
 functions nor a driver that takes them as arguments across processes (the dispatcher
 types are keyed by object identity), which is why the driver is instantiated from
 source.
@@ -25,6 +25,7 @@ source.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib
 import os
@@ -66,7 +67,9 @@ def cache_root() -> Path:
     return Path(base) / "models"
 
 
+@functools.lru_cache(maxsize=1)
 def _integrator_sources() -> dict[str, str]:
+    """The sources written again per model, read once per process (every run hashes them)."""
     sources = {name: (_HERE / f"{name}.py").read_text(encoding="utf-8") for name in MODEL_MODULES}
     sources.update({name: (_SYSTEMS / f"{name}.py").read_text(encoding="utf-8") for name in SYSTEM_MODULES})
     return sources

@@ -15,7 +15,6 @@ import xarray as xr
 from camdyn.errors import ParameterError
 from camdyn.integrator import driver as bundled
 from camdyn.integrator import instances
-from camdyn.params.units import parse_speed
 from camdyn.simulation import limits
 from camdyn.systems.protocol import MODEL_ID, BoundModel, adapter_source
 
@@ -39,9 +38,8 @@ def _speed(bound: BoundModel, speed) -> tuple[BoundModel, float]:
         if speed is not None:
             raise ParameterError(f"model {model.name!r} has no speed parameter; leave speed out")
         return bound, math.inf
-    if speed is not None:
-        value = parse_speed(speed) if isinstance(speed, str) else limits.check_number("speed", speed, "Hz")
-        bound = bound.replace({model.speed: value})
+    if speed is not None:   # read as the speed parameter is (numbers in Hz, text with units)
+        bound = bound.replace({model.speed: speed})
     hz = bound[model.speed]
     if not (math.isfinite(hz) and hz > 0.0):
         raise ParameterError(f"speed must be a positive number of Hz, got {hz!r}")
