@@ -84,7 +84,7 @@ def core(method):
     def run(case, rtol):
         y, _, _, counters = driver.integrate(
             systems.CAM_FOLLOWER, case.prep.p, case.prep.y0.copy(), 0.0, case.duration, case.t, rtol,
-            scalar_atol(rtol), case.period / 32, method, 50_000_000, 64 + 16 * case.revolutions, True)
+            scalar_atol(rtol), case.period / 32, method, 50_000_000, 64 + 16 * case.revolutions, True, math.inf)
         if counters[driver.COUNT_STATUS] != driver.STATUS_OK:
             raise RuntimeError(driver.STATUS_MESSAGES[int(counters[driver.COUNT_STATUS])])
         return y[:, 0], {name: int(counters[i]) for i, name in enumerate(driver.COUNTER_NAMES)

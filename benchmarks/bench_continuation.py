@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import platform
 import tempfile
 import time
@@ -67,7 +68,7 @@ def _steps(problem, orbit, variational):
     start = np.concatenate([orbit.full_state, np.eye(3).ravel()]) if variational else orbit.full_state.copy()
     system_id = systems.VARIATIONAL + problem.system_id if variational else problem.system_id
     _, _, _, counters = driver.integrate(system_id, p, start, 0.0, period, np.array([period]), rtol, atol,
-                                         period / 32.0, driver.METHOD_DOP853, 50_000_000, 100_000, True)
+                                         period / 32.0, driver.METHOD_DOP853, 50_000_000, 100_000, True, math.inf)
     return int(counters[driver.COUNT_ACCEPTED]), int(counters[driver.COUNT_REJECTED])
 
 

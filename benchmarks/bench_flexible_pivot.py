@@ -111,7 +111,7 @@ class Model:
             tolerance = float(atol)
         y, _, _, counters = driver.integrate(self.system_id, self.p, self.y0.copy(), 0.0, self.duration, self.t,
                                              float(rtol), tolerance, self.period / 32, method, 50_000_000,
-                                             64 + 16 * self.revolutions, True)
+                                             64 + 16 * self.revolutions, True, math.inf)
         if counters[driver.COUNT_STATUS] != driver.STATUS_OK:
             raise RuntimeError(driver.STATUS_MESSAGES[int(counters[driver.COUNT_STATUS])])
         names = {"accepted_steps": driver.COUNT_ACCEPTED, "rejected_steps": driver.COUNT_REJECTED,

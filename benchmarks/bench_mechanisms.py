@@ -132,7 +132,7 @@ class Model:
         t = self.t if t is None else t
         y, modes, _, counters = driver.integrate(self.system_id, self.p.copy(), self.y0.copy(), 0.0, self.duration,
                                                  t, float(rtol), float(atol), self.period / 32,
-                                                 driver.METHOD_DOP853, 50_000_000, self.room, True)
+                                                 driver.METHOD_DOP853, 50_000_000, self.room, True, math.inf)
         if counters[driver.COUNT_STATUS] != driver.STATUS_OK:
             raise RuntimeError(driver.STATUS_MESSAGES[int(counters[driver.COUNT_STATUS])])
         names = {"accepted_steps": driver.COUNT_ACCEPTED, "rejected_steps": driver.COUNT_REJECTED,

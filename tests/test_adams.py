@@ -43,7 +43,8 @@ def test_error_falls_with_the_tolerance():
     errors = []
     for rtol in (1e-5, 1e-7, 1e-9, 1e-11):
         y, _, _, counters = driver.integrate(systems.OSCILLATOR, p, np.array([1.0, 0.0, 0.0]), 0.0, 5.0,
-                                             t_out, rtol, rtol * 1e-2, 1.0, driver.METHOD_ADAMS, 10 ** 6, 100)
+                                             t_out, rtol, rtol * 1e-2, 1.0, driver.METHOD_ADAMS, 10 ** 6, 100,
+                                             False, math.inf)
         assert counters[driver.COUNT_STATUS] == 0
         errors.append(np.max(np.abs(y[:, 0] - ref)))
     assert all(b < a / 10 for a, b in zip(errors, errors[1:])), errors
@@ -57,7 +58,7 @@ def test_events_are_located_exactly():
     p = np.array([w, 0.0, 0.0, 0.0, 0.0])
     _, _, events, counters = driver.integrate(systems.OSCILLATOR, p, np.array([1.0, 0.0, 0.0]), 0.0, 10.0,
                                               np.array([0.0]), 1e-11, 1e-13, 1.0, driver.METHOD_ADAMS, 10 ** 6,
-                                              100)
+                                              100, False, math.inf)
     expected = (np.arange(events.shape[0]) + 0.5) * math.pi / w
     assert counters[driver.COUNT_STATUS] == 0
     assert events.shape[0] == int(10.0 * w / math.pi + 0.5)
@@ -86,7 +87,7 @@ def test_cam_run_against_the_oracle(impact_rig, rtol, method):
     # BDF switched automatically
     prep, t_out, truth = impact_rig
     y, _, events, counters = driver.integrate(systems.CAM_FOLLOWER, prep.p, prep.y0.copy(), 0.0, t_out[-1], t_out,
-                                              rtol, rtol * 1e-4, t_out[-1] / 32, method, 10 ** 7, 100)
+                                              rtol, rtol * 1e-4, t_out[-1] / 32, method, 10 ** 7, 100, False, math.inf)
     assert counters[driver.COUNT_STATUS] == 0
     assert events.shape[0] > 0
     error = np.max(np.abs(y[:, 0] - truth[0])) / np.max(np.abs(truth[0]))

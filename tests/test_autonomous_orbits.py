@@ -47,7 +47,7 @@ def time_run(system_id, p, y0, duration, rtol=1e-12):
     """The time-domain state after ``duration`` [s] of a plain run from ``y0`` at t = 0."""
     y, _, _, counters = driver.integrate(system_id, p.copy(), np.asarray(y0, float), 0.0, duration,
                                          np.array([duration]), rtol, rtol * 1e-2, 1e-3, driver.METHOD_DOP853,
-                                         50_000_000, 100_000, True)
+                                         50_000_000, 100_000, True, math.inf)
     assert counters[driver.COUNT_STATUS] == 0
     return y[-1]
 

@@ -60,7 +60,7 @@ def _oscillator_dip(epsilon, method, rtol=1e-9):
     p = np.array([w, 0.0, force, 0.0, 0.0])
     y0 = np.array([c * (2.0 + epsilon), 0.0, 0.0])
     _, _, events, counters = driver.integrate(systems.OSCILLATOR, p, y0, 0.0, 4.0, np.array([0.0]), rtol,
-                                              1e-3 * rtol, 10.0, method, 10 ** 6, 100)
+                                              1e-3 * rtol, 10.0, method, 10 ** 6, 100, False, math.inf)
     half_gap = math.acos(1.0 / (1.0 + epsilon)) / w if epsilon > 0 else 0.0
     return events, counters, (math.pi / w - half_gap, math.pi / w + half_gap)
 
@@ -91,7 +91,7 @@ def test_two_sign_changes_within_one_long_step(method):
     p = np.array([1.0, 0.0, 0.0, 0.0, 0.0])
     y0 = np.array([1e-3, -0.05, 0.0])
     _, _, events, _ = driver.integrate(systems.OSCILLATOR, p, y0, 0.0, 4.0, np.array([0.0]), 1e-6, 1e-9, 10.0,
-                                       method, 10 ** 6, 100)
+                                       method, 10 ** 6, 100, False, math.inf)
     t1 = math.atan2(1e-3, 0.05)
     assert events.shape[0] == 2, events
     np.testing.assert_allclose(events[:, 0], [t1, t1 + math.pi], rtol=0, atol=1e-5)

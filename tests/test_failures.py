@@ -60,7 +60,7 @@ def test_state_overflow_is_reported_as_not_finite_at_the_right_time(method):
     p = np.array([1.0, -100.0, 0.0, 0.0, 0.0])
     t_out = np.arange(0.0, 4.0, 1e-3)
     y, _, _, counters = driver.integrate(systems.OSCILLATOR, p, np.array([1.0, 0.0, 0.0]), 0.0, 4.0, t_out,
-                                         1e-8, 1e-10, 1.0, method, 10 ** 6, 10)
+                                         1e-8, 1e-10, 1.0, method, 10 ** 6, 10, False, math.inf)
     assert counters[driver.COUNT_STATUS] == driver.STATUS_NOT_FINITE
     assert NOT_FINITE in driver.STATUS_MESSAGES[driver.STATUS_NOT_FINITE]
     last = t_out[np.isfinite(y[:, 1])][-1]

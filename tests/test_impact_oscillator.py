@@ -21,7 +21,7 @@ METHODS = [driver.METHOD_EXPLICIT, driver.METHOD_ROSENBROCK, driver.METHOD_DOP85
 def _run(p, y0, t_end, method=driver.METHOD_AUTO, rtol=1e-11):
     _, _, events, counters = driver.integrate(systems.RIGID_IMPACT, np.asarray(p, float), np.asarray(y0, float),
                                               0.0, t_end, np.array([0.0]), rtol, 1e-3 * rtol, 10.0, method,
-                                              10 ** 7, 100_000)
+                                              10 ** 7, 100_000, False, math.inf)
     assert counters[driver.COUNT_STATUS] == driver.STATUS_OK
     return events
 
@@ -86,6 +86,7 @@ def test_wall_is_never_crossed_between_samples():
     p = np.array([1.0, 0.05, 1.0, 2.0, 0.0, 0.8])
     t_out = np.linspace(0.0, 60.0, 20001)
     y, _, events, counters = driver.integrate(systems.RIGID_IMPACT, p, np.array([-0.5, 0.0, 0.0]), 0.0, 60.0,
-                                              t_out, 1e-9, 1e-12, 10.0, driver.METHOD_AUTO, 10 ** 7, 10_000)
+                                              t_out, 1e-9, 1e-12, 10.0, driver.METHOD_AUTO, 10 ** 7, 10_000,
+                                              False, math.inf)
     assert counters[driver.COUNT_STATUS] == driver.STATUS_OK and events.shape[0] > 10
     assert y[:, 0].max() < 1e-9

@@ -64,7 +64,7 @@ def test_adaptive_error_scales_with_tolerance(method):
     errs = []
     for rtol in (1e-6, 1e-9):
         y, _, _, counters = driver.integrate(systems.OSCILLATOR, p, np.array([1.0, 0.0, 0.0]), 0.0, 5.0,
-                                             t_out, rtol, rtol * 1e-2, 1.0, method, 10 ** 6, 100)
+                                             t_out, rtol, rtol * 1e-2, 1.0, method, 10 ** 6, 100, False, math.inf)
         assert counters[driver.COUNT_STATUS] == 0
         errs.append(np.max(np.abs(y[:, 0] - ref)))
     # global error stays within a modest multiple of the tolerance and falls with it
@@ -83,7 +83,7 @@ def test_events_are_located_exactly(method):
     w = 7.0
     p = np.array([w, 0.0, 0.0, 0.0, 0.0])
     _, _, events, counters = driver.integrate(systems.OSCILLATOR, p, np.array([1.0, 0.0, 0.0]), 0.0, 10.0,
-                                              np.array([0.0]), 1e-11, 1e-13, 1.0, method, 10 ** 6, 100)
+                                              np.array([0.0]), 1e-11, 1e-13, 1.0, method, 10 ** 6, 100, False, math.inf)
     expected = (np.arange(events.shape[0]) + 0.5) * math.pi / w
     assert events.shape[0] == int(10.0 * w / math.pi + 0.5)
     np.testing.assert_allclose(events[:, 0], expected, rtol=0, atol=1e-9)
@@ -97,7 +97,7 @@ def test_crossing_inside_a_long_step_is_located(method):
     y0 = np.array([1e-3, -0.05, 0.0])  # crosses zero near t = 0.02, returns near t = pi - 0.02
     t_out = np.array([0.0])
     _, _, events, _ = driver.integrate(systems.OSCILLATOR, p, y0, 0.0, 0.5, t_out, 1e-10, 1e-12, 10.0,
-                                       method, 10 ** 6, 100)
+                                       method, 10 ** 6, 100, False, math.inf)
     exact_t = math.atan2(1e-3, 0.05)  # y = 1e-3 cos t - 0.05 sin t = 0
     assert events.shape[0] == 1
     assert events[0, 0] == pytest.approx(exact_t, abs=1e-10)

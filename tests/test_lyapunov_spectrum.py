@@ -257,7 +257,7 @@ def test_translating_follower_rebound_from_the_moving_cam_carries_the_reset_rate
     def advance(state, start, span):
         out, _, events, counters = driver.integrate(systems.TRANSLATING_FOLLOWER, p, state, start, start + span,
                                                     np.array([start + span]), 1e-12, 1e-14, period / 64,
-                                                    driver.METHOD_AUTO, 10 ** 8, 1000, True)
+                                                    driver.METHOD_AUTO, 10 ** 8, 1000, True, math.inf)
         events = events[:int(counters[driver.COUNT_EVENTS])]
         return out[0].copy(), events[events[:, driver.EVENT_GUARD] != translating.JOINT]   # the profile's joints
     for _ in range(150):

@@ -39,7 +39,7 @@ def plain_end(problem, x, value, periods=1, rtol=1e-12):
     y0 = problem.full_state(x, value)
     t1 = periods * period
     y, _, _, counters = driver.integrate(problem.system_id, p, y0, 0.0, t1, np.array([t1]), rtol, rtol * 1e-2,
-                                         period / 32.0, driver.METHOD_DOP853, 50_000_000, 100_000, True)
+                                         period / 32.0, driver.METHOD_DOP853, 50_000_000, 100_000, True, math.inf)
     assert counters[driver.COUNT_STATUS] == 0
     return y[-1, :problem.unknowns]
 

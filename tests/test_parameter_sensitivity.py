@@ -101,7 +101,8 @@ def _simulation_differences(system, key, y0, t1, step):
     def end(u):
         p = prepare(system.with_values(**{key: u})).p
         out, _, _, counters = driver.integrate(systems.CAM_FOLLOWER, p, np.array(y0, float), 0.0, t1, np.array([t1]),
-                                               1e-12, 1e-14, t1 / 32, driver.METHOD_DOP853, 10 ** 8, 100_000)
+                                               1e-12, 1e-14, t1 / 32, driver.METHOD_DOP853, 10 ** 8, 100_000,
+                                               False, math.inf)
         assert counters[driver.COUNT_STATUS] == driver.STATUS_OK
         return out[-1]
 

@@ -198,6 +198,6 @@ def test_profiles_without_joints_have_no_joint_guard(profile):
     assert systems.expected_sign(systems.TRANSLATING_FOLLOWER, model.JOINT, mode, p) == 0.0
     t_out = np.linspace(0.0, 1.0, 11)
     _, _, events, counters = driver.integrate(systems.TRANSLATING_FOLLOWER, p, np.zeros(2), 0.0, 1.0, t_out, 1e-10,
-                                              1e-12, 0.01, driver.METHOD_AUTO, 100_000, 1000, True)
+                                              1e-12, 0.01, driver.METHOD_AUTO, 100_000, 1000, True, math.inf)
     assert counters[driver.COUNT_STATUS] == driver.STATUS_OK and events.shape[0] > 0
     assert not np.any(events[:, driver.EVENT_GUARD] == model.JOINT)

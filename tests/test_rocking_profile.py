@@ -67,7 +67,7 @@ def _run(system, viscous_c, revolutions=3.0, rtol=1e-11):
     t = np.minimum(np.arange(int(duration * 20e3) + 1) / 20e3, duration)
     y, _, events, counters = driver.integrate(registry.CAM_FOLLOWER, prep.p, prep.y0, 0.0, duration, t, rtol,
                                               rtol * 1e-2, period / 32.0, driver.METHOD_AUTO, 50_000_000, 1000,
-                                              True)
+                                              True, math.inf)
     assert counters[driver.COUNT_STATUS] == driver.STATUS_OK
     return y[:, :2], impact_table(events)["time"].size
 

@@ -91,7 +91,8 @@ def _central(system_id, p, y0, t0, t1, steps, rtol, atol):
             y = np.array(y0, float)
             y[i] += sign * step
             out, _, _, counters = driver.integrate(system_id, p, y, t0, t1, np.array([t1]), rtol, atol,
-                                                   (t1 - t0) / 32, driver.METHOD_DOP853, 10 ** 8, 100_000)
+                                                   (t1 - t0) / 32, driver.METHOD_DOP853, 10 ** 8, 100_000,
+                                                   False, math.inf)
             assert counters[driver.COUNT_STATUS] == driver.STATUS_OK
             ends.append(out[-1])
         columns.append((ends[0] - ends[1]) / (2 * step))

@@ -37,7 +37,7 @@ def _exact(t, y0):
 
 def _integrate(p, y0, t_end, t_out, method, rtol=1e-11, atol=1e-13):
     y, modes, events, counters = driver.integrate(SYSTEM, p, np.asarray(y0, float), 0.0, t_end, t_out, rtol, atol,
-                                                  0.5, method, 10 ** 7, 1000)
+                                                  0.5, method, 10 ** 7, 1000, False, math.inf)
     assert counters[driver.COUNT_STATUS] == driver.STATUS_OK
     return y, modes, events
 
@@ -92,7 +92,7 @@ def test_a_wall_on_the_second_mass_matches_an_independent_event_driven_solution(
 def test_a_state_of_the_wrong_size_is_refused():
     with pytest.raises(ValueError, match="state_size"):
         driver.integrate(SYSTEM, _params(), np.zeros(3), 0.0, 1.0, np.array([0.5]), 1e-8, 1e-10, 0.1,
-                         driver.METHOD_AUTO, 1000, 10)
+                         driver.METHOD_AUTO, 1000, 10, False, math.inf)
 
 
 @settings(max_examples=40, deadline=None)

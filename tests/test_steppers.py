@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pytest
 from scipy.linalg import expm
+from test_bdf import STIFF_P  # the overdamped oscillator, stiff
 
 from camdyn.integrator import driver
 from camdyn.integrator.steppers import (
@@ -194,7 +195,7 @@ def test_dop853_driver_global_error_follows_rtol():
     errors = []
     for rtol in rtols:
         y, _, _, counters = driver.integrate(OSC, P, Y0, 0.0, 5.0, t_out, rtol, rtol * 1e-2, 1.0,
-                                             driver.METHOD_DOP853, 10 ** 6, 100)
+                                             driver.METHOD_DOP853, 10 ** 6, 100, False, math.inf)
         assert counters[driver.COUNT_STATUS] == driver.STATUS_OK
         errors.append(np.max(np.abs(y[:, 0] - ref)))
     errors = np.array(errors)
@@ -219,7 +220,7 @@ def test_work_counters(method, per_attempt, per_accepted, jacobians):
     # zero: no event, and output only at both ends
     p = np.array([W0, 2.0, 0.0, 0.0, 0.0])
     _, _, events, c = driver.integrate(OSC, p, Y0, 0.0, 3.0, np.array([0.0, 3.0]), 1e-9, 1e-11, 1.0, method,
-                                       10 ** 6, 10)
+                                       10 ** 6, 10, False, math.inf)
     assert c[driver.COUNT_STATUS] == driver.STATUS_OK and events.shape[0] == 0 == c[driver.COUNT_EVENTS]
     accepted, attempts = c[driver.COUNT_ACCEPTED], c[driver.COUNT_ACCEPTED] + c[driver.COUNT_REJECTED]
     assert accepted > 10
@@ -257,6 +258,8 @@ def test_dop853_error_norm_of_an_exact_step_with_an_underflowing_third_order_est
 
 # --- absolute tolerances per component -----------------------------------------------------------
 
+# both runs with an array atol sit in this file: each new argument type of the driver is a
+# whole compile (minutes), done once here rather than on two test workers at once
 def test_an_absolute_tolerance_per_component():
     # the error norms read atol[i] for component i when atol is an array: the same norm as
     # one number when every entry is that number, and the RMS of err_i / (atol_i + rtol |y_i|)
@@ -273,9 +276,23 @@ def test_an_absolute_tolerance_per_component():
     ref = np.array([exact(t, Y0) for t in t_out])
     runs = {}
     for name, atol in (("number", 1e-9), ("equal", np.full(3, 1e-9)), ("loose", np.array([1e-9, 1e-6, 1e-9]))):
-        runs[name] = driver.integrate(OSC, P, Y0, 0.0, 5.0, t_out, 0.0, atol, 1.0, driver.METHOD_DOP853, 10 ** 6, 100)
+        runs[name] = driver.integrate(OSC, P, Y0, 0.0, 5.0, t_out, 0.0, atol, 1.0, driver.METHOD_DOP853, 10 ** 6, 100,
+        False, math.inf)
         assert runs[name][3][driver.COUNT_STATUS] == driver.STATUS_OK
     assert np.array_equal(runs["number"][0], runs["equal"][0]) and np.array_equal(runs["number"][3], runs["equal"][3])
     assert runs["loose"][3][driver.COUNT_ACCEPTED] < runs["number"][3][driver.COUNT_ACCEPTED]
     assert np.max(np.abs(runs["loose"][0][:, 0] - ref[:, 0])) < 5e-9
     assert np.max(np.abs(runs["loose"][0][:, 1] - ref[:, 1])) > np.max(np.abs(runs["number"][0][:, 1] - ref[:, 1]))
+
+
+def test_an_absolute_tolerance_per_component_reaches_the_bdf_norms():
+    # the switching method's norms (the corrector's, the stiffness estimate's, the switch's)
+    # read atol[i] per component: an array of equal entries runs bitwise the run of one number
+    t_out = np.linspace(0.0, 2.0, 41)
+    runs = []
+    for atol in (1e-8, np.full(3, 1e-8)):
+        runs.append(driver.integrate(systems.OSCILLATOR, STIFF_P, np.array([1.0, 0.0, 0.0]), 0.0, 2.0, t_out,
+                                     1e-6, atol, 1.0, driver.METHOD_MULTISTEP, 10 ** 7, 100, False, math.inf))
+    assert runs[0][3][driver.COUNT_STATUS] == driver.STATUS_OK
+    assert runs[0][3][driver.COUNTER_NAMES.index("bdf_steps")] > 0
+    assert np.array_equal(runs[0][0], runs[1][0]) and np.array_equal(runs[0][3], runs[1][3])

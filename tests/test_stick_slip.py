@@ -23,7 +23,7 @@ GUARDS = stick_slip.GUARD_COUNT
 
 def _integrate(p, y0, t_end, t_out):
     y, modes, events, counters = driver.integrate(SYSTEM, p, np.asarray(y0, float), 0.0, t_end, t_out, 1e-12,
-                                                  1e-15, 0.05, driver.METHOD_AUTO, 10 ** 7, 10000)
+                                                  1e-15, 0.05, driver.METHOD_AUTO, 10 ** 7, 10000, False, math.inf)
     assert counters[driver.COUNT_STATUS] == driver.STATUS_OK
     return y, modes, events
 

@@ -34,7 +34,8 @@ def _alpha(prep, y0, t_start, t, rtol):
     """alpha [rad] of the compiled core at the times ``t`` [s], atol = 1e-4 rtol (the
     work-precision benchmark's setting), the method chosen by the system."""
     y, _, _, counters = driver.integrate(systems.CAM_FOLLOWER, prep.p, y0.copy(), t_start, t[-1], t, rtol,
-                                         1e-4 * rtol, 1.0 / (32 * SPEED), driver.METHOD_AUTO, 10 ** 7, 1000)
+                                         1e-4 * rtol, 1.0 / (32 * SPEED), driver.METHOD_AUTO, 10 ** 7, 1000,
+                                         False, math.inf)
     assert counters[driver.COUNT_STATUS] == driver.STATUS_OK
     return y[:, 0]
 

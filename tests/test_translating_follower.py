@@ -217,7 +217,7 @@ def test_the_variational_system_of_the_compliant_follower_matches_finite_differe
 
     def run(system, y):
         out, _, events, counters = driver.integrate(system, p, y, 0.0, t_end, t_out, 1e-12, 1e-14, 1e-3,
-                                                    driver.METHOD_AUTO, 10 ** 6, 1000)
+                                                    driver.METHOD_AUTO, 10 ** 6, 1000, False, math.inf)
         assert counters[driver.COUNT_STATUS] == driver.STATUS_OK
         return out[-1], events
     big = run(systems.VARIATIONAL + systems.TRANSLATING_FOLLOWER, np.r_[y0, 1.0, 0.0, 0.0, 1.0])[0]

@@ -322,7 +322,7 @@ def test_the_variational_system_matches_finite_differences(damping_law):
 
     def run(system, y):
         out, _, events, counters = driver.integrate(system, p, y, 0.0, t_end, np.array([t_end]), 1e-12, 1e-14,
-                                                    1e-3, driver.METHOD_AUTO, 10 ** 6, 1000)
+                                                    1e-3, driver.METHOD_AUTO, 10 ** 6, 1000, False, math.inf)
         assert counters[driver.COUNT_STATUS] == driver.STATUS_OK
         return out[-1], events
     big = run(systems.VARIATIONAL + systems.TRANSLATING_FOLLOWER, np.r_[y0, 1.0, 0.0, 0.0, 1.0])[0]

@@ -458,14 +458,15 @@ def test_follower_two_on_a_held_cam_moves_as_the_single_follower_placed_where_it
     period = rig.system.motion.period
     times = np.linspace(0.0, revolutions * period, 401)
     both, _, _, counters = driver.integrate(registry.TWO_FOLLOWERS, p_pair, y_pair, 0.0, times[-1], times, 1e-12,
-                                            1e-14, period / 64.0, driver.METHOD_DOP853, 10_000_000, 100_000)
+                                            1e-14, period / 64.0, driver.METHOD_DOP853, 10_000_000, 100_000,
+                                            False, math.inf)
     assert counters[driver.COUNT_STATUS] == 0
     shifted = rig.system.with_values(**{"motion.initial_angle": y_pair[4] - rig.placement})
     p_one = prepare(shifted).p
     p_one[L.VISCOUS_C] = prepare(rig.system).viscous_c        # the single follower's own coefficient
     one, _, _, counters = driver.integrate(registry.CAM_FOLLOWER, p_one, np.array([y_pair[2], 0.0, 0.0]), 0.0,
                                            times[-1], times, 1e-12, 1e-14, period / 64.0, driver.METHOD_DOP853,
-                                           10_000_000, 100_000)
+                                           10_000_000, 100_000, False, math.inf)
     assert counters[driver.COUNT_STATUS] == 0
     for column, slot in ((0, 2), (1, 3)):
         expected = one[:, column]

@@ -40,9 +40,11 @@ __all__ = ["LyapunovResult", "lyapunov_exponent"]
 @numba.njit(cache=True)
 def _advance(p, y, t0, t1, rtol, atol, period):
     t_out = np.array([t1])
+    # np.int64 and np.bool_, not literals: a literal argument is a type of its own to numba,
+    # and each new type of argument costs a whole compile of the driver
     out, modes, events, counters = driver.integrate(systems.CAM_FOLLOWER, p, y, t0, t1, t_out, rtol, atol,
-                                                    period * STEP_FRACTION, driver.METHOD_AUTO, 10 ** 8, 16, True,
-                                                    period * SCAN_FRACTION)
+                                                    period * STEP_FRACTION, driver.METHOD_AUTO, np.int64(10 ** 8),
+                                                    np.int64(16), np.bool_(True), period * SCAN_FRACTION)
     return out[0].copy(), counters[driver.COUNT_STATUS]
 
 

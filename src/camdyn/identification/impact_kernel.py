@@ -254,9 +254,10 @@ def simulate_impacts(params, impact, beta, exponent, alpha0, alpha_dot0, t_end, 
         q[L.EXPONENT] = exponent[j]
         t_sorted, order = _output_times(offsets[i], t_end[i], grid_points)
         y0 = np.array([alpha0[i], alpha_dot0[i], 0.0])
+        # typed values, not literals: each new argument type is a whole compile of the driver
         y, modes, events, counters = driver.integrate(
             systems.CAM_FOLLOWER, q, y0, 0.0, t_end[i], t_sorted, rtol, atol, h_max,
-            driver.METHOD_AUTO, 10_000_000, 256)
+            driver.METHOD_AUTO, np.int64(10_000_000), np.int64(256), np.bool_(False), math.inf)
         status[j] = counters[driver.COUNT_STATUS]
         if status[j] != 0:
             continue

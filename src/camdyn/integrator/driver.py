@@ -396,7 +396,7 @@ def _fill_end(t, y, mode, t_out, i_out, y_out, mode_out, counters):
 
 @numba.njit(cache=True, pipeline_class=InlinedPipeline)
 def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, method, max_steps,
-              max_events, interruptible=False, scan=math.inf):
+              max_events, interruptible, scan):
     """Integrate a registered hybrid system from ``t_start`` to ``t_end``.
 
     Parameters
@@ -426,7 +426,8 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
         for calls that hold the GIL: not from ``nogil`` or ``parallel`` kernels.
     scan : float
         Longest interval [s] whose guards one cubic checks: a longer step is scanned on
-        sub-intervals (:mod:`camdyn.integrator.crossings`); default none.
+        sub-intervals (:mod:`camdyn.integrator.crossings`); ``math.inf`` for none. All
+        required: an omitted argument or a literal is a new type, a whole compile.
 
     Returns
     -------
@@ -444,8 +445,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     g, gr, g1, gr1, gv, grv, g_tmp, gr_tmp = guards
     t = t_start
     i_out, h, monitor_max = _start(system, t, t_end, h_max, y, f, mode, p, g, gr, t_out, y_out, mode_out, counters)
-    n_events = 0
-    e_accepted = 1e-4
+    n_events, e_accepted = 0, 1e-4
     last_event_t = -math.inf
     zeno = 0
     retried = False

@@ -368,7 +368,7 @@ def run_follower(system_id, p, y0, duration, sample_rate, n_out, period, rtol, a
     start = _time.perf_counter()
     y, modes, events, counters = driver.integrate(system_id, p, y0, 0.0, float(duration), t_out, float(rtol),
                                                   float(atol), float(max_step), driver.METHOD_AUTO, int(max_steps),
-                                                  int(max_events), True)
+                                                  int(max_events), True, math.inf)
     elapsed = _time.perf_counter() - start
     limits.check_run(counters, "simulation")
     return t_out, y, modes, events, counters, elapsed

@@ -87,14 +87,16 @@ def simulate_points(params, starts, periods, revolutions, discard, samples, rtol
         for k in range(m):
             t_out[k] = t_start_window + k * (period / samples)
         t_end = revolutions * period
+        # np.bool_(False), not the literal: a literal is a type of its own to numba, and
+        # each new argument type is a whole compile of the driver
         y, modes, events, count = driver.integrate(
             systems.CAM_FOLLOWER, p, starts[i], 0.0, t_end, t_out, rtol, atol, period * STEP_FRACTION,
-            driver.METHOD_AUTO, max_steps, max_events, False, period * SCAN_FRACTION)
+            driver.METHOD_AUTO, max_steps, max_events, np.bool_(False), period * SCAN_FRACTION)
         if count[driver.COUNT_EVENTS_DROPPED] > 0 and count[driver.COUNT_STATUS] == driver.STATUS_OK:
             # the log ran out of room: the same run again, with room for every event
             y, modes, events, count = driver.integrate(
                 systems.CAM_FOLLOWER, p, starts[i], 0.0, t_end, t_out, rtol, atol, period * STEP_FRACTION,
-                driver.METHOD_AUTO, max_steps, count[driver.COUNT_EVENTS] + 16, False, period * SCAN_FRACTION)
+                driver.METHOD_AUTO, max_steps, count[driver.COUNT_EVENTS] + 16, np.bool_(False), period * SCAN_FRACTION)
         counters[i, :] = count
         if count[driver.COUNT_STATUS] != driver.STATUS_OK:
             continue
