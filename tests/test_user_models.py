@@ -244,3 +244,63 @@ def test_valve_train_periodic_orbit_against_scipy(valve):
     # and a short branch in the speed
     branch = continue_orbits(problem, orbit, 31.0, step=0.01, max_step=0.05, max_points=40)
     assert branch.orbits[-1].parameter == pytest.approx(31.0)
+
+
+def test_valve_train_sweep_on_the_sweep_engine(valve, tmp_path):
+    """The sweep engine over the user's model, its points run by two worker processes
+    that load the model from its file: at 2 Hz the valve's peak lift is the quasi-static
+    balance of contact and spring, a closed form; at 40 Hz the events, the section and the
+    peak lift are those of the independent SciPy solution."""
+    from camdyn.sweeps import run_sweep, spec_from_dict
+
+    spec = spec_from_dict({
+        "system": {"source": f"{EXAMPLE.name}:VALVE_TRAIN"},   # relative to the spec's folder
+        "vary": [{"key": "speed", "values": ["120 rpm", "40 Hz"]}],
+        "run": {"revolutions": 3, "discard": 1, "samples_per_revolution": 2048, "rtol": 1e-11, "atol": 1e-14,
+                "chunk": 1},
+        "output": {"path": str(tmp_path / "valve.nc")}}, base_dir=EXAMPLE.parent)
+    ds = run_sweep(spec, workers=2, progress=False)
+    assert list(ds["speed"].values) == [2.0, 40.0] and ds["speed"].attrs["units"] == "Hz"
+    assert ds["max_x_v"].attrs["units"] == "m" and ds["events_seat"].attrs["units"] == "1/rev"
+    q = dict(zip(valve.VALVE_TRAIN.parameter_names, valve.VALVE_TRAIN.bind().values))
+    # 2 Hz: k_c (h - lash - x) = P + K x, K the two spring halves in series; the valve's
+    # and coil's inertia at the peak (m 4 h (pi / beta)^2 omega^2 / k_c) moves it 0.14 um
+    k_series = 1.0 / (1.0 / q["spring.head_stiffness"] + 1.0 / q["spring.retainer_stiffness"])
+    x_peak = (q["cam.lift"] - q["lash"] - q["spring.preload"] / q["contact.stiffness"]) / (
+        1.0 + k_series / q["contact.stiffness"])
+    assert abs(float(ds["max_x_v"].sel(speed=2.0)) - x_peak) < 0.5e-6
+    assert int(ds["period"].sel(speed=2.0)) == 1
+    # 40 Hz against SciPy over the kept revolutions 1..3 (periods of 25 ms)
+    period = 1.0 / 40.0
+    times = np.linspace(period, 3 * period, 2 * 2048 + 1)
+    bound = valve.VALVE_TRAIN.bind({"speed": 40.0})
+    q40 = dict(q, speed=40.0)
+    reference, events = _scipy_valve_train(q40, bound.initial_state(), np.r_[0.0, times])
+    reference = reference[1:]
+    _, discarded = _scipy_valve_train(q40, bound.initial_state(), np.array([0.0, period]))
+    np.testing.assert_allclose(ds["poincare_x_v"].sel(speed=40.0).values, reference[[0, 2048], 0],
+                               rtol=0, atol=1e-7 * q["cam.lift"])
+    assert float(ds["max_x_v"].sel(speed=40.0)) == pytest.approx(reference[:-1, 0].max(), abs=1e-7 * q["cam.lift"])
+    per_revolution = float(ds["events_seat"].sel(speed=40.0) + ds["events_cam_contact"].sel(speed=40.0))
+    assert per_revolution * 2 == events - discarded   # SciPy's crossings of both gaps in the kept window
+    assert float(ds["events_seat"].sel(speed=40.0)) > 2   # the valve bounces on its seat
+    # the same spec again resumes from its checkpoints: nothing recomputed, the same numbers
+    again = run_sweep(spec, workers=1, progress=False)
+    assert again.equals(ds)
+
+
+def test_a_model_sweep_refuses_unknown_keys_and_files(valve, tmp_path):
+    from camdyn.sweeps import spec_from_dict
+
+    base = {"system": {"source": f"{EXAMPLE}:VALVE_TRAIN"}, "output": {"path": str(tmp_path / "x.nc")}}
+    with pytest.raises(ParameterError, match="did you mean spring.preload"):
+        spec_from_dict(dict(base, vary=[{"key": "spring.preloads", "values": [200, 300]}]))
+    with pytest.raises(ParameterError, match="speed.*must be positive"):
+        spec_from_dict(dict(base, vary=[{"key": "speed", "values": [-5, 30]}]))
+    with pytest.raises(ParameterError, match="no model 'VALVE'"):
+        spec_from_dict(dict(base, system={"source": f"{EXAMPLE}:VALVE"}, vary=[{"key": "lash", "values": [1e-4]}]))
+    with pytest.raises(ParameterError, match="does not exist"):
+        spec_from_dict(dict(base, system={"source": str(tmp_path / "none.py")}, vary=[{"key": "lash",
+                                                                                       "values": [1e-4]}]))
+    with pytest.raises(ParameterError, match="unknown metric"):
+        spec_from_dict(dict(base, vary=[{"key": "lash", "values": [1e-4]}], metrics={"names": ["regime"]}))

@@ -64,13 +64,14 @@ def _sweep_line(ds: xr.Dataset, dims: list, path) -> Path:
     """One swept dimension: bifurcation diagram and metrics against the parameter."""
     first = _coordinate(ds, dims[0])
     x, _ = display_values(first)
-    panels = [n for n in ("poincare_alpha", "impacts_per_revolution", "residual_rms", "max_normal_force") if n in ds]
+    panels = _line_panels(ds)
     fig, axes = plt.subplots(len(panels), 1, figsize=(7.0, 1.9 * len(panels) + 0.8), sharex=True, squeeze=False)
     for ax, name in zip(axes[:, 0], panels):
         values, _ = display_values(ds[name])
-        if name == "poincare_alpha":
+        if name.startswith("poincare_"):
             ax.plot(np.repeat(x, ds.sizes["revolution"]), values.ravel(), ",", color="k", alpha=0.6)
-            ax.set_title(r"bifurcation diagram: follower angle $\alpha_P$ once per cam revolution")
+            ax.set_title(r"bifurcation diagram: follower angle $\alpha_P$ once per cam revolution"
+                         if name == "poincare_alpha" else f"bifurcation diagram: {ds[name].attrs['long_name']}")
         else:
             ax.plot(x, values, ".-", lw=0.8, ms=2.5)
         ax.set_ylabel(_metric_label(ds[name]))
@@ -79,6 +80,18 @@ def _sweep_line(ds: xr.Dataset, dims: list, path) -> Path:
     axes[-1, 0].set_xlabel(coordinate_label(first))
     fig.align_ylabels(axes[:, 0])
     return save_figure(fig, path)
+
+
+def _line_panels(ds: xr.Dataset) -> list[str]:
+    """The panels of a sweep over one dimension: the cam-follower's metrics, or, for a
+    model of the model protocol, its first state's section, each guard's events per period
+    and its first state's largest value."""
+    panels = [n for n in ("poincare_alpha", "impacts_per_revolution", "residual_rms", "max_normal_force") if n in ds]
+    if panels:
+        return panels
+    names = [str(n) for n in ds.data_vars]
+    return ([n for n in names if n.startswith("poincare_")][:1] + [n for n in names if n.startswith("events_")]
+            + [n for n in names if n.startswith("max_")][:1]) or ["status"]
 
 
 def _cell_edges(values: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -117,7 +130,8 @@ def plot_sweep(ds: xr.Dataset, path: str | Path) -> Path:
     first, second = _coordinate(ds, dims[0]), _coordinate(ds, dims[1])
     x, _ = display_values(first)
     y, _ = display_values(second)
-    names = [n for n in ("regime", "impacts_per_revolution") if n in ds] or ["status"]
+    names = [n for n in ("regime", "impacts_per_revolution") if n in ds] or [n for n in ("period",) if n in ds] \
+        or ["status"]
     fig, axes = plt.subplots(1, len(names), figsize=(5.2 * len(names) + 0.6, 4.6), squeeze=False)
     (x_edges, x_log), (y_edges, y_log) = _cell_edges(x), _cell_edges(y)
     for ax, name in zip(axes[0], names):

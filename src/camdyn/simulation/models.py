@@ -139,7 +139,8 @@ def _dataset(bound, driver, t_out, y, modes, events, counters, elapsed, period, 
     data["event_monitor"] = ("event", events[:, 3],
                              {"units": "", "long_name": "largest monitored value since the event before"})
     attrs = {"model": model.name, "rtol": rtol, "atol": atol, "elapsed_s": elapsed,
-             "steps": int(counters[bundled.COUNT_ACCEPTED]), "rhs_calls": int(counters[bundled.COUNT_RHS])}
+             "steps": int(counters[bundled.COUNT_ACCEPTED]), "rejected_steps": int(counters[bundled.COUNT_REJECTED]),
+             "rhs_calls": int(counters[bundled.COUNT_RHS])}
     if math.isfinite(period):
         attrs["speed_hz"] = 1.0 / period
     for q, value in zip(model.parameters, bound.values):

@@ -51,7 +51,7 @@ from camdyn.errors import CamdynError, ParameterError, SimulationError, SweepInt
 from camdyn.integrator import driver
 from camdyn.model.layout import SIZE
 from camdyn.simulation.runner import penetration_resolution, prepare
-from camdyn.sweeps import worker
+from camdyn.sweeps import families, worker
 from camdyn.sweeps.spec import SweepSpec
 from camdyn.sweeps.store import Checkpoint
 
@@ -156,7 +156,7 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int = 1) -> dict:
     waits, so that Ctrl-C raises ``KeyboardInterrupt`` here at once: the kernel is told
     to stop through its abort flag and skips the points it has not begun.
     """
-    if spec.mechanism:   # Python runs, one point after another: Ctrl-C stops between two
+    if spec.runner:   # Python runs, one point after another: Ctrl-C stops between two
         function, args, prepared, finish = _chunk_task(spec, chunk, threads)
         return finish(prepared, function(*args))
     prepared = prepare_chunk(spec, chunk)
@@ -275,9 +275,9 @@ def _stop_workers(pool: cf.ProcessPoolExecutor) -> None:
 
 def _prepare_base(spec: SweepSpec):
     """The base system made ready for the kernel, or None where it cannot be (its points
-    are then refused one by one, with their reasons) or where the sweep is over a
-    mechanism (which does not run the kernel)."""
-    if spec.mechanism:
+    are then refused one by one, with their reasons) or where the sweep's points run in
+    Python (a mechanism's, a protocol model's), not in the kernel."""
+    if spec.runner:
         return None
     try:
         return prepare(spec.base_system())
@@ -381,11 +381,11 @@ def _chunk_size(spec: SweepSpec, chunk: int) -> int:
 def _chunk_task(spec: SweepSpec, chunk: int, threads: int) -> tuple:
     """``(function, arguments, preparation, finish)`` of one chunk: what a worker runs,
     prepared in the parent, and how its result is merged with the preparation (the
-    compiled kernel of the rocking cam-follower, or a mechanism's Python runs)."""
-    if spec.mechanism:
-        from camdyn.sweeps import mechanism_run
-        prepared = mechanism_run.prepare_chunk(spec, chunk)
-        return mechanism_run.run_chunk, mechanism_run.run_args(spec, prepared), prepared, mechanism_run.finish
+    compiled kernel of the rocking cam-follower, or the Python runs of the family's runner,
+    :func:`camdyn.sweeps.families.chunk_task`)."""
+    task = families.chunk_task(spec, chunk)
+    if task is not None:
+        return task
     prepared = prepare_chunk(spec, chunk)
     return worker.run_chunk, _run_args(spec, prepared, threads), prepared, _finish
 

@@ -15,7 +15,7 @@ from camdyn.errors import CamdynError
 from camdyn.sweeps import mechanism_metrics as MM
 
 __all__ = ["STATUS_OK", "STATUS_REFUSED", "STATUS_SOLVER", "prepare_chunk", "run_args", "run_chunk", "finish",
-           "sample_rate"]
+           "sample_rate", "variables", "definitions"]
 
 STATUS_OK, STATUS_REFUSED, STATUS_SOLVER = 0, 1, 2
 
@@ -114,3 +114,16 @@ def finish(prepared: dict, result: dict) -> dict:
     result["status"] = status
     result["failure"] = np.array(failure, dtype=str)
     return result
+
+
+def variables(spec) -> dict:
+    """name -> (extra dimensions, their sizes, dtype, units, long name) of each result
+    variable of a sweep over a mechanism."""
+    return MM.variables(spec.mechanism, spec.metrics, spec.kept_revolutions, spec.harmonics)
+
+
+def definitions(spec) -> tuple[dict, dict]:
+    """The metric definitions and the result's extra global attributes."""
+    from camdyn.sweeps.mechanism_spec import MECHANISM_METRICS
+
+    return MECHANISM_METRICS, {"mechanism": spec.mechanism, "mechanism_source": str(spec.source)}

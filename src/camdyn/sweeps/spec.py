@@ -34,7 +34,9 @@ A spec is a TOML file (or the same tables as a dict)::
 A ``[system] source`` that is a mechanism file (a ``[mechanism]`` table) makes a sweep
 over that mechanism: its keys, checks and metrics are those of
 :mod:`camdyn.sweeps.mechanism_spec`, and each point runs through
-:func:`camdyn.io.mechanism_config.simulate_mechanism`.
+:func:`camdyn.io.mechanism_config.simulate_mechanism`. A source ``"FILE.py:NAME"`` makes
+a sweep over that model of the model protocol (:mod:`camdyn.sweeps.model_run`); the
+families are told apart in :mod:`camdyn.sweeps.families`.
 
 A relative ``[system] source`` TOML path is taken relative to the spec's folder; a
 relative ``[output] path`` relative to the current working directory (the result goes
@@ -60,36 +62,17 @@ import numpy as np
 
 from camdyn import __version__
 from camdyn.errors import CamdynError, ParameterError
-from camdyn.params.config import (
-    SCHEMA,
-    convert_value,
-    load_system,
-    loads_toml,
-    system_from_toml,
-    system_to_toml,
-    unknown_key_error,
-)
+from camdyn.params.config import loads_toml, system_from_toml
 from camdyn.params.system import System
+from camdyn.sweeps.families import ROCKING_METRICS, family_of, result_variables
 
 __all__ = ["METRICS", "Vary", "SweepSpec", "load_spec", "spec_from_dict"]
 
-#: metric name -> what it adds to the result
-METRICS = {
-    "residual": "rms and peak-to-peak of the residual response alpha - alpha_rigid [rad]",
-    "impacts": "impacts (contact onsets) per revolution [1/rev]",
-    "poincare": "once-per-revolution samples of alpha [rad] and alpha_dot [rad/s]",
-    "max_force": "largest normal contact force [N]",
-    "regime": "contact kept / sliding reversal / periodic impacts / irregular impacts, and the "
-              "Poincare period",
-    "spectrum": "cam-harmonic amplitudes of alpha_ddot [rad/s^2] and the largest spectral peak",
-}
+#: metric name -> what it adds to the result of a sweep over the rocking cam-follower
+METRICS = ROCKING_METRICS
 
 _RUN_DEFAULTS = {"revolutions": 60.0, "discard": 20.0, "samples_per_revolution": 64, "rtol": 3e-7,
                  "atol": 1e-10, "chunk": 8}
-#: run defaults over a mechanism: its metrics come from the sampled run, so it is sampled
-#: finely enough to resolve an impact's contact and peak force (about 0.4 ms at the
-#: chapter 3 rig's 16 Hz)
-_MECHANISM_RUN = {"samples_per_revolution": 1024, "atol": 1e-11}
 _TABLES = {"system", "vary", "run", "metrics", "output"}
 #: Most points a sweep may have [-] (10^9 at a millisecond each is 12 CPU-days).
 MAX_POINTS = 10 ** 9
@@ -152,6 +135,9 @@ class SweepSpec:
     output : result path (netCDF).
     mechanism : the mechanism kind of a sweep over a mechanism file (its ``system_toml``
         is then the whole mechanism, :mod:`camdyn.sweeps.mechanism_spec`); empty for the
+        other families.
+    runner : the module that runs the points in Python (a mechanism's or a protocol
+        model's, :mod:`camdyn.sweeps.families`); empty for the compiled kernel of the
         rocking cam-follower.
     """
 
@@ -171,6 +157,7 @@ class SweepSpec:
     output: Path
     name: str = "sweep"
     mechanism: str = ""
+    runner: str = ""
     _base: System | None = field(default=None, compare=False, repr=False)
 
     @property
@@ -253,17 +240,7 @@ def _limits():
     return limits
 
 
-def _rocking_key(key: str) -> tuple[str, callable]:
-    """The SI unit of a rocking sweep's varied ``key`` and its raw-to-SI conversion."""
-    if key not in SCHEMA:
-        raise unknown_key_error(key)
-    unit, _ = SCHEMA[key]
-    if unit in ("str", "bool", "int", "law"):
-        raise ParameterError(f"sweep spec: {key} cannot be swept (only quantities with units can)")
-    return ("Hz" if unit == "speed" else unit), (lambda raw: float(convert_value(key, raw, {})))
-
-
-def _values(i: int, entry: dict, key_unit=_rocking_key) -> Vary:
+def _values(i: int, entry: dict, key_unit) -> Vary:
     where = f"[[vary]] #{i + 1}"
     allowed = {"key", "values", "start", "stop", "num", "spacing", "dimension"}
     extra = set(entry) - allowed
@@ -344,26 +321,15 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
     sys_t = _table(spec, "system", {"source", "set"})
     if "source" not in sys_t:
         raise ParameterError("sweep spec: [system] needs source = \"PRESET\" or \"path/to/system.toml\"")
-    source = str(sys_t["source"])
-    if source.endswith(".toml") and not Path(source).is_absolute():
-        source = str(base_dir / source)
     overrides = sys_t.get("set", {})
     if not isinstance(overrides, dict):
         raise ParameterError("sweep spec: [system] set must be a table of KEY = \"VALUE\"")
-    from camdyn.params.mechanism import is_mechanism
-    if is_mechanism(source):
-        from camdyn.sweeps import mechanism_spec
-        kind, toml_text = mechanism_spec.base_mechanism(source, overrides)
-        base, key_unit = None, mechanism_spec.key_unit
-    else:
-        kind, key_unit = "", _rocking_key
-        toml_text = system_to_toml(load_system(source, overrides))
-        base = system_from_toml(toml_text)
+    family = family_of(str(sys_t["source"]), overrides, base_dir)
 
     entries = spec.get("vary", [])
     if not isinstance(entries, list) or not entries:
         raise ParameterError("sweep spec: give at least one [[vary]] table")
-    vary = tuple(_values(i, e if isinstance(e, dict) else {}, key_unit) for i, e in enumerate(entries))
+    vary = tuple(_values(i, e if isinstance(e, dict) else {}, family.key_unit) for i, e in enumerate(entries))
     keys = [v.key for v in vary]
     if len(set(keys)) != len(keys):
         raise ParameterError(f"sweep spec: a parameter is varied twice ({keys})")
@@ -378,10 +344,10 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
         raise ParameterError(f"sweep spec: {points:.3g} points ({' x '.join(str(n) for n in dims.values())}) is more "
                              f"than {MAX_POINTS:.0e}; at a millisecond or more each that is beyond any machine's "
                              f"reach: coarsen the grid or split the sweep")
-    _check_values(base, vary, source, overrides)
+    family.check_values(vary)
 
-    run = {**_RUN_DEFAULTS, **(_MECHANISM_RUN if kind else {}), **_table(spec, "run", set(_RUN_DEFAULTS))}
-    if kind and "atol" in spec.get("run", {}):
+    run = {**_RUN_DEFAULTS, **family.run_defaults, **_table(spec, "run", set(_RUN_DEFAULTS))}
+    if not family.atol and "atol" in spec.get("run", {}):
         raise ParameterError("sweep spec: [run] atol: a mechanism runs with its entry's own absolute tolerance "
                              "(1e-11); give rtol only")
     revolutions = int(_number("run", "revolutions", run["revolutions"], integer=True))
@@ -407,13 +373,13 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
                          limit=MAX_CHUNK_SAMPLES, unit="samples")
 
     met = _table(spec, "metrics", {"names", "harmonics"})
-    allowed = list(METRICS) if not kind else list(mechanism_spec.KIND_METRICS[kind])
+    allowed = list(family.default_metrics)
     names = met.get("names", allowed)
     if not isinstance(names, list) or not names:
         raise ParameterError("sweep spec: [metrics] names must be a non-empty list")
     unknown = [n for n in names if n not in allowed]
     if unknown:
-        over = f" over a {kind} mechanism" if kind else ""
+        over = f" over a {family.kind} mechanism" if family.kind else ""
         raise ParameterError(f"sweep spec: [metrics] names: unknown metric(s){over} {unknown}; choose from {allowed}")
     harmonics = int(_number("metrics", "harmonics", met.get("harmonics", 10), integer=True))
     if 2 * harmonics >= samples:
@@ -423,12 +389,13 @@ def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep"
     path = Path(str(out.get("path", f"{name}.nc")))   # a relative path: the working directory's
     if path.suffix not in (".nc", ".h5"):
         raise ParameterError(f"sweep spec: [output] path must end in .nc (netCDF4/HDF5), got {path.name!r}")
-    _check_result_size(points, names, harmonics, revolutions - discard, path)
-    return SweepSpec(source=source, overrides=dict(overrides), system_toml=toml_text, vary=vary,
-                     dimensions=tuple(dims.items()), revolutions=revolutions, discard=discard,
-                     samples_per_revolution=samples, rtol=rtol, atol=atol, chunk=chunk,
-                     metrics=tuple(dict.fromkeys(names)), harmonics=harmonics, output=path, name=name,
-                     mechanism=kind, _base=base)
+    result = SweepSpec(source=family.source, overrides=dict(overrides), system_toml=family.text, vary=vary,
+                       dimensions=tuple(dims.items()), revolutions=revolutions, discard=discard,
+                       samples_per_revolution=samples, rtol=rtol, atol=atol, chunk=chunk,
+                       metrics=tuple(dict.fromkeys(names)), harmonics=harmonics, output=path, name=name,
+                       mechanism=family.kind, runner=family.runner, _base=family.base)
+    _check_result_size(result)
+    return result
 
 
 def checked_values(values) -> list[float]:
@@ -441,41 +408,22 @@ def checked_values(values) -> list[float]:
     return values
 
 
-def _check_values(base: System | None, vary, source: str, overrides: dict) -> None:
-    """Every value on its own must make a valid system (negative mass, unreachable cam,
-    ...) or mechanism (``base`` None); only combinations of values may fail (those
-    points are recorded as failed)."""
-    if base is None:
-        from camdyn.sweeps.mechanism_spec import check_values
-        check_values(source, overrides, vary)
-        return
-    from camdyn.simulation.runner import prepare
-    for v in vary:
-        for value in checked_values(v.values):
-            try:
-                prepare(base.with_values(**{v.key: value}))
-            except CamdynError as exc:
-                raise ParameterError(f"sweep spec: {v.key} = {value:g} {v.unit}: {exc}") from None
-
-
-def result_bytes(points: int, metrics, harmonics: int, kept: int) -> int:
+def result_bytes(spec: SweepSpec) -> int:
     """Size of a sweep's result [B]: its metric variables and per-point solver bookkeeping
-    (about 40 B), for ``points`` points."""
-    from camdyn.sweeps.metrics import variables
-
+    (about 40 B)."""
     per_point = 40
-    for _, sizes, dtype, _, _ in variables(metrics, harmonics, kept).values():
+    for _, sizes, dtype, _, _ in result_variables(spec).values():
         per_point += math.prod(sizes) * {"f8": 8, "i8": 8, "i2": 2, "i1": 1}.get(dtype, 8)
-    return points * per_point
+    return spec.points * per_point
 
 
-def _check_result_size(points: int, metrics, harmonics: int, kept: int, path: Path) -> None:
+def _check_result_size(spec: SweepSpec) -> None:
     """Refuse a sweep whose result (plus its checkpoints, as large again) does not fit on
     the output's disk; warn when it is large."""
     from camdyn.io.atomic import free_space
 
-    needed = 2 * result_bytes(points, metrics, harmonics, kept)
-    folder = path.parent if path.parent.exists() else Path(".")
+    needed = 2 * result_bytes(spec)
+    folder = spec.output.parent if spec.output.parent.exists() else Path(".")
     free = free_space(folder)
     if 0 <= free < needed:
         raise ParameterError(f"sweep spec: the result and its checkpoints need about {needed / 1e9:.3g} GB but "

@@ -34,7 +34,8 @@ from camdyn.errors import OutputError, ParameterError
 from camdyn.io.atomic import atomic_output, remove_stale, write_text
 from camdyn.io.netcdf import GuardedFile
 from camdyn.sweeps import metrics as M
-from camdyn.sweeps.spec import METRICS, SweepSpec
+from camdyn.sweeps.families import metric_definitions, result_variables
+from camdyn.sweeps.spec import SweepSpec
 
 __all__ = ["Checkpoint", "SOLVER_VARIABLES"]
 
@@ -238,12 +239,8 @@ class Checkpoint:
 
 
 def _layout(spec: SweepSpec) -> dict:
-    """The result's metric variables (:func:`camdyn.sweeps.metrics.variables`, or
-    :func:`camdyn.sweeps.mechanism_metrics.variables` for a sweep over a mechanism)."""
-    if spec.mechanism:
-        from camdyn.sweeps import mechanism_metrics
-        return mechanism_metrics.variables(spec.mechanism, spec.metrics, spec.kept_revolutions, spec.harmonics)
-    return M.variables(spec.metrics, spec.harmonics, spec.kept_revolutions)
+    """The result's metric variables (:func:`camdyn.sweeps.families.result_variables`)."""
+    return result_variables(spec)
 
 
 def _checksum(arrays: dict) -> str:
@@ -349,11 +346,7 @@ def _write_rows(var, rows: np.ndarray, start: int, shape: tuple[int, ...]) -> No
 
 
 def _global_attributes(spec: SweepSpec) -> dict:
-    definitions = METRICS
-    extra = {}
-    if spec.mechanism:
-        from camdyn.sweeps.mechanism_spec import MECHANISM_METRICS as definitions
-        extra = {"mechanism": spec.mechanism, "mechanism_source": str(spec.source)}
+    definitions, extra = metric_definitions(spec)
     return {**extra,
         "title": f"camdyn sweep {spec.name}",
         "source": f"camdyn {__version__}",

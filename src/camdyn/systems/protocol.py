@@ -54,7 +54,7 @@ from camdyn.params.units import parse_quantity, parse_speed
 #: ignores it; it keeps the bundled models' id-keyed traits off protocol models.
 MODEL_ID = 99
 
-__all__ = ["Model", "BoundModel", "Quantity", "MODEL_ID", "adapter_source", "REQUIRED", "OPTIONAL"]
+__all__ = ["Model", "BoundModel", "Quantity", "MODEL_ID", "adapter_source", "read_value", "REQUIRED", "OPTIONAL"]
 
 #: The functions a model must give, and those it may give.
 REQUIRED = ("rhs", "guards", "expected_sign", "transition", "initial_mode")
@@ -225,7 +225,7 @@ class Model:
             if value is None:
                 raise ParameterError(f"model {self.name!r}: parameter {q.name!r} [{q.unit}] ({q.description}) "
                                      "has no default; give it a value")
-            values.append(_parse(value, q))
+            values.append(read_value(value, q))
         return BoundModel(self, tuple(values))
 
     def dependencies(self) -> tuple[str, ...]:
@@ -239,7 +239,9 @@ class Model:
         return tuple(sorted(files))
 
 
-def _parse(value, q: Quantity) -> float:
+def read_value(value, q: Quantity) -> float:
+    """``value`` of the quantity ``q`` as a number in its SI unit: a number as it is, text
+    with units converted (``"0.2 mm"``, ``"2400 rpm"`` for a speed in Hz)."""
     if isinstance(value, bool):
         raise ParameterError(f"parameter {q.name!r} [{q.unit}]: expected a number or text with units, got {value!r}")
     if isinstance(value, (int, float, np.floating, np.integer)):
