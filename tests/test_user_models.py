@@ -304,3 +304,38 @@ def test_a_model_sweep_refuses_unknown_keys_and_files(valve, tmp_path):
                                                                                        "values": [1e-4]}]))
     with pytest.raises(ParameterError, match="unknown metric"):
         spec_from_dict(dict(base, vary=[{"key": "lash", "values": [1e-4]}], metrics={"names": ["regime"]}))
+
+
+def _cli(*argv):
+    import contextlib
+    import io
+
+    from camdyn.cli.app import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        status = main([str(a) for a in argv])
+    return status, out.getvalue(), err.getvalue()
+
+
+def test_the_command_line_simulates_the_model_file(valve, tmp_path):
+    """``camdyn simulate FILE.py:NAME``: the summary's speed, revolutions and events are
+    those of the independent SciPy solution over the same two revolutions."""
+    import json
+
+    status, out, err = _cli("simulate", f"{EXAMPLE}:VALVE_TRAIN", "--speed", "2400rpm", "--revolutions", "2",
+                            "--rtol", "1e-11", "--json", "--plot", tmp_path / "vt.png")
+    assert status == 0, err
+    summary = json.loads(out)["summary"]
+    assert summary["speed_hz"] == pytest.approx(40.0, rel=1e-15) and summary["revolutions"] == pytest.approx(2.0)
+    bound = valve.VALVE_TRAIN.bind({"speed": 40.0})
+    q = dict(zip(bound.model.parameter_names, bound.values))
+    _, events = _scipy_valve_train(q, bound.initial_state(), np.array([0.0, 2 / 40.0]))
+    assert sum(summary["events_per_revolution"].values()) * 2 == pytest.approx(events)
+    assert summary["ranges"]["x_v"]["unit"] == "m" and (tmp_path / "vt.png").stat().st_size > 0
+    # bad input: one line, exit 2, nothing written
+    for argv, words in (((f"{EXAMPLE}:VALVE", ), "no model 'VALVE'"),
+                        ((f"{EXAMPLE}:VALVE_TRAIN", "--set", "lashes=1mm"), "no parameter 'lashes'"),
+                        ((str(tmp_path / "none.py"), ), "does not exist")):
+        status, out, err = _cli("simulate", *argv, "--revolutions", "1")
+        assert status == 2 and words in err and len(err.strip().splitlines()) == 1, err

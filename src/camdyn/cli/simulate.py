@@ -22,6 +22,7 @@ from camdyn.params.config import (
 from camdyn.params.mechanism import is_mechanism
 from camdyn.params.profiles import declared_kind, is_translating, list_translating_presets, translating_preset_text
 from camdyn.params.units import parse_quantity, parse_speed
+from camdyn.systems.model_files import is_model_reference
 
 
 def presets_list(ctx: typer.Context):
@@ -176,6 +177,9 @@ def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              json_out: bool = JsonOption):
     """Simulate the follower and summarise the response.
 
+    FILE.py:NAME is a model of the model protocol in a file of yours (docs/user-models.md),
+    --set taking its parameter names.
+
     A configuration whose [follower] says kind = "translating" (or the preset alzate) is a
     translating follower on a cam profile, kind = "rocking" a rocking roller or knife edge
     on one (docs/profiles.md). A file with a [mechanism] table is a mechanism: the cam
@@ -184,6 +188,10 @@ def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     from camdyn.simulation.runner import simulate as run
     _check_revolutions(revolutions)
     check_outputs(netcdf=out, figure=plot, force=force)
+    if is_model_reference(source):
+        from camdyn.cli.models import simulate_model_command
+        simulate_model_command(source, set_, speed, revolutions, sample_rate, out, plot, rtol, json_out)
+        return
     if is_mechanism(source):
         from camdyn.cli.mechanism import simulate_mechanism_command
         simulate_mechanism_command(source, set_, speed, revolutions, sample_rate, out, plot, method, rtol, json_out)
