@@ -339,3 +339,26 @@ def test_the_command_line_simulates_the_model_file(valve, tmp_path):
                         ((str(tmp_path / "none.py"), ), "does not exist")):
         status, out, err = _cli("simulate", *argv, "--revolutions", "1")
         assert status == 2 and words in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_the_command_line_continues_the_model_file(valve):
+    """``camdyn continue FILE.py:NAME``: each orbit of the branch closes on itself under
+    the independent SciPy model."""
+    import json
+
+    status, out, err = _cli("continue", f"{EXAMPLE}:VALVE_TRAIN", "--from", "30Hz", "--to", "1830rpm",
+                            "--transient", "30", "--json", "--quiet")
+    assert status == 0, err
+    document = json.loads(out)
+    assert document["summary"]["parameter"] == "speed" and document["summary"]["units"] == "Hz"
+    orbits = document["branches"][0]
+    assert orbits[-1]["parameter"] == pytest.approx(30.5)
+    q = dict(zip(valve.VALVE_TRAIN.parameter_names, valve.VALVE_TRAIN.bind().values))
+    for orbit in (orbits[0], orbits[-1]):
+        state = np.array(orbit["state"])
+        end, _ = _scipy_valve_train(dict(q, speed=orbit["parameter"]), state, np.array([0.0, orbit["period"]]))
+        scale = np.array([q["cam.lift"], 1.0, q["cam.lift"], 1.0])   # m, m/s
+        assert np.all(np.abs(end[-1] - state) <= 1e-6 * scale)
+    status, _, err = _cli("continue", f"{EXAMPLE}:VALVE_TRAIN", "--parameter", "lashes", "--from", "1mm", "--to",
+                          "2mm")
+    assert status == 2 and "no parameter 'lashes'" in err and len(err.strip().splitlines()) == 1

@@ -83,7 +83,7 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         continue_translating_command(source, set_, parameter or "motion.speed", start, stop, period, step, max_points,
                                      transient, doublings, brute_force, plot, out, quiet, json_)
         return
-    system, parameter, unit, mechanism = _load(source, set_, parameter, brute_force)
+    system, parameter, unit, trace = _load(source, set_, parameter, brute_force)
     first, last = _value(start, "--from", unit, parameter), _value(stop, "--to", unit, parameter)
     if first == last:
         raise ParameterError("--from and --to must differ")
@@ -99,8 +99,9 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     bar = _Bar(quiet or (json_ and not err_console.is_terminal), parameter, unit, first, last,
                max_points * (1 + doublings))
     with bar:
-        problem, branch = _trace(system, parameter, first, last, period, step, max_points, transient, bar,
-                                 segments, mechanism)
+        bar.phase(f"the first orbit ({transient} periods of transient, then Newton's method)")
+        problem, branch = trace(system, parameter, first, last, period, step, max_points, transient,
+                                progress=bar.orbit, segments=segments)
         bar.phase(f"the period-{2 * period} branches" if doublings else "")
         branches = [branch, *switch_doublings(problem, branch, last, doublings, step, max_points,
                                               progress=bar.orbit)]
@@ -157,24 +158,40 @@ def _brute_force(source, set_, parameter, first, last, count, quiet):
 
 
 def _load(source, set_, parameter, brute_force):
-    """``(system, parameter, unit, mechanism)``: the cam-follower, or a mechanism's rig
-    (``mechanism`` True), the continued parameter (its default where None) and its unit."""
+    """``(system, parameter, unit, trace)``: the cam-follower, a mechanism's rig or a
+    protocol model with its parameters, the continued parameter (its default where None),
+    its unit, and the function that traces its branch (the signature of
+    :func:`~camdyn.continuation.results.trace_branch`)."""
     from camdyn.continuation.autonomous import default_key, is_autonomous
+    from camdyn.continuation.mechanisms import trace_mechanism
     from camdyn.continuation.problem import parameter_unit
+    from camdyn.continuation.results import trace_branch, trace_model
+    from camdyn.params.config import parse_assignments
     from camdyn.params.mechanism import is_mechanism
+    from camdyn.systems.model_files import is_model_reference, load_model
 
+    if is_model_reference(source):
+        if brute_force:
+            raise ParameterError("--brute-force draws the cam-follower's diagram; for a model of your own run "
+                                 "camdyn sweep over the same range")
+        bound = load_model(source).bind(parse_assignments(set_))
+        parameter = parameter or bound.model.speed
+        units = {q.name: q.unit for q in bound.model.parameters}
+        if parameter not in units:
+            raise ParameterError(f"model {bound.model.name!r} has no parameter {parameter!r}; its parameters: "
+                                 f"{', '.join(units)}")
+        return bound, parameter, units[parameter], trace_model
     if not is_mechanism(source):
         system = load_source(source, set_)
         parameter = parameter or "motion.speed"
-        return system, parameter, parameter_unit(system, parameter), False
+        return system, parameter, parameter_unit(system, parameter), trace_branch
     from camdyn.io.mechanism_config import load_mechanism, mechanism_rig
-    from camdyn.params.config import parse_assignments
 
     if brute_force:
         raise ParameterError("--brute-force sweeps the cam-follower; it is not offered for a mechanism")
     rig = mechanism_rig(load_mechanism(source, parse_assignments(set_)))
     parameter = parameter or (default_key(rig) if is_autonomous(rig) else "motion.speed")
-    return rig, parameter, _mechanism_unit(rig, parameter), True
+    return rig, parameter, _mechanism_unit(rig, parameter), trace_mechanism
 
 
 def _mechanism_unit(rig, parameter: str) -> str:
@@ -195,18 +212,6 @@ def _mechanism_unit(rig, parameter: str) -> str:
         raise ParameterError(f"{parameter} is a key of a cam under its drive (the driven cam, or two followers "
                              "whose drive.kind is not 'prescribed')")
     return parameter_unit(rig.system, parameter)
-
-
-def _trace(system, parameter, first, last, period, step, max_points, transient, bar, segments, mechanism=False):
-    """The branch, reporting each orbit to ``bar`` (``system`` a mechanism's rig when
-    ``mechanism``)."""
-    from camdyn.continuation.mechanisms import trace_mechanism
-    from camdyn.continuation.results import trace_branch
-
-    trace = trace_mechanism if mechanism else trace_branch     # the same signature
-    bar.phase(f"the first orbit ({transient} periods of transient, then Newton's method)")
-    return trace(system, parameter, first, last, period, step, max_points, transient, progress=bar.orbit,
-                 segments=segments)
 
 
 class _Bar:

@@ -92,6 +92,33 @@ def trace_branch(system: System, key: str, start: float, stop: float, periods: i
     return problem, branch
 
 
+def trace_model(bound, key: str | None, start, stop, periods: int = 1, step: float = 0.02, max_points: int = 200,
+                transient: int = 50, rtol: float = 1e-10, progress: Callable[[Orbit], None] | None = None,
+                segments: int = 1) -> tuple[Problem, Branch]:
+    """:func:`trace_branch` for a model of the model protocol (``Model.bind()``): the
+    branch in its parameter ``key`` (default its speed), ``start`` and ``stop`` numbers in
+    the parameter's unit or text with units, through
+    :func:`~camdyn.continuation.problem.bound_problem`."""
+    from camdyn.continuation.problem import bound_problem
+    from camdyn.systems.protocol import BoundModel, read_value
+
+    if not isinstance(bound, BoundModel):
+        raise ParameterError(f"expected a model with its parameters (Model.bind()), got {type(bound).__name__}")
+    key = bound.model.speed if key is None else key
+    quantity = {q.name: q for q in bound.model.parameters}.get(key)
+    if quantity is None:
+        raise ParameterError(f"model {bound.model.name!r} has no parameter {key!r}; its parameters: "
+                             f"{', '.join(bound.model.parameter_names)}")
+    start, stop = read_value(start, quantity), read_value(stop, quantity)
+    check_trace_settings(start, stop, periods, segments, transient, max_points, step, "forcing periods")
+    problem = bound_problem(bound.replace({key: start}), key, rtol=rtol, atol=rtol * 1e-2)
+    problem.build(stop)                                       # refuse an end value the model cannot take
+    orbit = find_orbit(problem, periods=int(periods), transient=transient, segments=int(segments))
+    branch = continue_orbits(problem, orbit, stop, step=step, max_step=max(step, 0.1), max_points=max_points,
+                             progress=progress)
+    return problem, branch
+
+
 def switch_doublings(problem: Problem, branch: Branch, stop: float, levels: int = 1, step: float = 0.02,
                      max_points: int = 200, progress: Callable[[Orbit], None] | None = None) -> list[Branch]:
     """The period-doubled branches born on ``branch``: at each of its period doublings the
