@@ -216,3 +216,19 @@ def test_core_cache_detection(tmp_path):
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)})
     assert proc.stdout.strip() == "False", proc.stderr
+
+
+def test_compile_says_what_it_made_ready():
+    """``camdyn compile --all``: every part of the core made ready, with its time; after
+    it, a simulation and a sweep point need no compile in this process."""
+    from camdyn.integrator import driver
+    from camdyn.sweeps import kernel
+
+    status, out, err = run("compile", "--all", "--json")
+    assert status == 0, err
+    summary = json.loads(out)["summary"]
+    assert set(summary) == {"simulation_s", "sweeps_s", "lyapunov_s"} and all(v > 0 for v in summary.values())
+    assert driver.integrate.signatures and kernel.simulate_points.signatures
+    compiled = len(driver.integrate.signatures)
+    camdyn.simulate(camdyn.load_system("sundar2014-friction"), revolutions=1)   # another preset: the same code
+    assert len(driver.integrate.signatures) == compiled

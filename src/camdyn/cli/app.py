@@ -18,7 +18,7 @@ import warnings
 import typer
 
 from camdyn import __version__
-from camdyn.cli import analysis, continuation, impact, records, simulate, sweep
+from camdyn.cli import analysis, continuation, impact, records, simulate, sweep, warmup
 from camdyn.cli.common import compile_notice
 from camdyn.errors import RUNTIME_ERRORS, CamdynError, SweepInterrupted
 
@@ -89,6 +89,7 @@ app.command("lyapunov")(_interruptible(sweep.lyapunov))
 app.command("map")(_interruptible(analysis.regime_map_command))
 app.command("spectrum")(_interruptible(analysis.spectrum))
 app.command("continue")(_interruptible(continuation.continue_branch))
+app.command("compile")(_interruptible(warmup.compile_core))
 
 
 def _on_signal(signum, frame):
