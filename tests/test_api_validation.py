@@ -450,3 +450,18 @@ def test_mechanism_sweep_spec_checks_a_bounded_number_of_values(tmp_path, monkey
     from camdyn.sweeps.spec import CHECKED_VALUES
 
     assert spec.points == 1000 and len(calls) == 1 + CHECKED_VALUES     # the base mechanism, then the values
+
+
+@pytest.mark.parametrize("path, words", [
+    ("examples/profiles/rocking_roller.toml", "the rocking follower ([follower] kind = 'rocking')"),
+    ("examples/mechanisms/flexible_pivot.toml", "a mechanism's configuration"),
+])
+def test_another_familys_configuration_is_named_not_taken_for_a_typo(path, words):
+    """A configuration of another family given to an entry of the thesis's rocking
+    follower says what it is, not "unknown parameter 'follower.kind'; did you mean ..."."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    with pytest.raises(ParameterError, match="not the rocking flat-faced follower") as caught:
+        camdyn.load_system(str(root / path))
+    assert words in str(caught.value) and "did you mean" not in str(caught.value)

@@ -225,10 +225,25 @@ def read_table(source: str | Path) -> tuple[dict, str, str]:
         table = loads_toml(text, source)
     except tomllib.TOMLDecodeError as exc:
         raise PresetError(f"{source}: not valid TOML ({exc})") from None
+    other = _other_family(table)
+    if other:
+        raise ParameterError(f"{source} is {other}, not the rocking flat-faced follower of the thesis that this "
+                             "entry takes; camdyn simulate takes every family, and docs/capabilities.md lists which "
+                             "commands take which")
     flat = flatten(table)
     meta_name = flat.get("preset.name", name)
     citation = flat.get("preset.citation", "")
     return flat, str(meta_name), str(citation)
+
+
+def _other_family(table: dict) -> str:
+    """What a configuration's tables say it is when it is not the rocking flat-faced
+    follower (a mechanism, a follower of another kind), or empty."""
+    if isinstance(table.get("mechanism"), dict):
+        return "a mechanism's configuration (a [mechanism] table)"
+    follower = table.get("follower")
+    kind = follower.get("kind") if isinstance(follower, dict) else None
+    return f"a configuration of the {kind} follower ([follower] kind = {kind!r})" if isinstance(kind, str) else ""
 
 
 def system_from_toml(text: str) -> System:
