@@ -81,7 +81,7 @@ def test_driven_cam_command_writes_the_python_run(tmp_path):
                            "5kHz", "--out", nc, "--json")
     assert status == 0, err
     document = json.loads(out)
-    assert document["schema"] == "camdyn.simulate-mechanism/1"
+    assert document["schema"] == "camdyn.simulate-mechanism/2"
     # the docs' Python example: the rig at 11.55 Hz on a motor running free at 1.2 times that
     system = load_system("sundar2014-friction")
     drive = CamDrive(shaft_inertia=3e-4, kind="motor", stall_torque=1.0, free_speed=2.0 * math.pi * 13.86)

@@ -16,6 +16,7 @@ import threading
 import warnings
 
 import typer
+from typer.core import TyperGroup
 
 from camdyn import __version__
 from camdyn.cli import analysis, continuation, impact, records, simulate, sweep, warmup
@@ -46,8 +47,19 @@ def _interruptible(command):
     return wrapper
 
 
+class _PresetsGroup(TyperGroup):
+    """``camdyn presets NAME`` is ``camdyn presets show NAME``: a first argument that is no
+    subcommand is a preset's name."""
+
+    def parse_args(self, ctx, args):
+        if args and not args[0].startswith("-") and args[0] not in self.commands:
+            args = ["show", *args]
+        return super().parse_args(ctx, args)
+
+
 app = typer.Typer(add_completion=False, no_args_is_help=True)
-presets_app = typer.Typer(help="List and show bundled parameter presets.", invoke_without_command=True)
+presets_app = typer.Typer(help="List the bundled presets (every kind), or show one: camdyn presets NAME.",
+                          invoke_without_command=True, cls=_PresetsGroup)
 identify_app = typer.Typer(help="Estimate model parameters from measured records.", no_args_is_help=True)
 
 

@@ -45,11 +45,11 @@ def mechanism_summary(ds) -> dict:
                    bearing_torque_max_N_m=float(np.abs(ds["bearing_torque"].values).max()))
     if kind == "driven-cam":
         out.update(contact_torque_max_N_m=float(np.abs(ds["contact_torque"].values).max()),
-                   Fn_max_N=float(ds["Fn"].max()), contact_fraction=float(ds["in_contact"].mean()))
+                   Fn_max_N=float(ds["Fn"].max()))
     elif kind == "two-followers":
         kinds = ds["transition_kind"].values
         out.update(Fn_max_N=[float(v) for v in ds["Fn"].max("time").values],
-                   contact_fraction=[float(v) for v in ds["in_contact"].mean("time").values],
+                   contact_fraction_per_follower=[float(v) for v in ds["in_contact"].mean("time").values],
                    sticks=_count(kinds, "stick"), slips=_count(kinds, "slip"), reversals=_count(kinds, "reversal"),
                    sprags=_count(kinds, "sprag"))
     else:
@@ -59,8 +59,26 @@ def mechanism_summary(ds) -> dict:
                    pivot_damping_N_s_m=float(ds.attrs["pivot_damping"]),
                    bearing_force_max_N=float(force.max()),
                    pivot_displacement_max_m=float(np.hypot(ds["u"].values, ds["v"].values).max()),
-                   Fn_max_N=float(ds["Fn"].max()), contact_fraction=float(ds["in_contact"].mean()))
+                   Fn_max_N=float(ds["Fn"].max()))
+    out.update(_common(ds, kind, out["revolutions"]))
     return out
+
+
+def _common(ds, kind: str, revolutions: float) -> dict:
+    """The keys every kind's ``camdyn simulate`` summary shares (docs/cli-json.md):
+    ``speed_hz`` [Hz] (a driven shaft's mean cam speed), ``contact_fraction`` (of the
+    samples; two followers: the mean of theirs), the landings seen in the samples and
+    ``impacts_per_revolution`` [1/rev]."""
+    contact = ds["in_contact"].values > 0.5
+    if contact.ndim == 1:
+        contact = contact[:, None]
+    landings = int(np.count_nonzero(contact[1:] & ~contact[:-1]))
+    if kind == "flexible-pivot":
+        speed = float(ds.attrs["speed_hz"])
+    else:
+        speed = abs(float(ds.attrs["mean_cam_speed"])) / (2.0 * math.pi)
+    return {"speed_hz": speed, "contact_fraction": float(contact.mean()), "impacts": landings,
+            "impacts_per_revolution": landings / revolutions if revolutions else 0.0}
 
 
 def _pair(values, fmt: str, unit: str) -> str:
@@ -69,7 +87,10 @@ def _pair(values, fmt: str, unit: str) -> str:
 
 def _print(out: dict) -> None:
     table = Table("quantity", "value", title=f"simulation of {out['preset']} ({out['mechanism']})")
+    table.add_row("cam speed", f"{out['speed_hz']:.5g} Hz" + (" (mean)" if "drive" in out else ""))
     table.add_row("revolutions", f"{out['revolutions']:.4g}")
+    table.add_row("landings (in the samples)",
+                  f"{out['impacts']} ({out['impacts_per_revolution']:.3g} per revolution)")
     if "drive" in out:
         table.add_row("drive", f"{out['drive']}, shaft inertia {out['shaft_inertia_kg_m2']:.4g} kg m^2")
         table.add_row("mean cam speed", f"{out['mean_speed_rpm']:.5g} rpm")
@@ -85,7 +106,7 @@ def _print(out: dict) -> None:
         table.add_row("peak pivot displacement", f"{out['pivot_displacement_max_m'] * 1e6:.4g} um")
     if out["mechanism"] == "two-followers":
         table.add_row("peak normal force", _pair(out["Fn_max_N"], ".5g", "N"))
-        table.add_row("time in contact", _pair([100 * f for f in out["contact_fraction"]], ".1f", "%"))
+        table.add_row("time in contact", _pair([100 * f for f in out["contact_fraction_per_follower"]], ".1f", "%"))
         table.add_row("sticks / slips / reversals", f"{out['sticks']} / {out['slips']} / {out['reversals']}")
         table.add_row("sprags (self-locking)", f"{out['sprags']}")
     else:

@@ -31,6 +31,9 @@ from camdyn.errors import OutputError
 NETCDF_SUFFIXES = (".nc",)
 #: The version of every JSON schema (docs/cli-json.md); bumped when a key changes meaning.
 SCHEMA_VERSION = 1
+#: The schemas past version 1: ``simulate-mechanism`` 2 gives ``contact_fraction`` of two
+#: followers as one number (their list is ``contact_fraction_per_follower``).
+SCHEMA_VERSIONS = {"simulate-mechanism": 2}
 
 
 def _refuse_existing(path: Path, force: bool) -> None:
@@ -141,7 +144,8 @@ def print_json(obj) -> None:
 def emit_json(command: str, summary: dict, **details) -> dict:
     """Print ``{"schema": "camdyn.COMMAND/1", "summary": {...}, ...details}`` (the
     headline numbers first, then the details); return it."""
-    document = {"schema": f"camdyn.{command}/{SCHEMA_VERSION}", "summary": summary, **details}
+    version = SCHEMA_VERSIONS.get(command, SCHEMA_VERSION)
+    document = {"schema": f"camdyn.{command}/{version}", "summary": summary, **details}
     print_json(document)
     return document
 

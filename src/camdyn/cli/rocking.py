@@ -30,6 +30,7 @@ def rocking_summary(ds, follower, name: str) -> dict:
     liftoff = rocking_liftoff_speed(follower)
     return {
         "preset": name,
+        "speed_hz": speed / (2.0 * math.pi),
         "speed_rpm": 60.0 * speed / (2.0 * math.pi),
         "revolutions": revolutions,
         "impacts": count["impact"],

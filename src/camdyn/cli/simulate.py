@@ -13,44 +13,41 @@ from rich.table import Table
 from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, load_source
 from camdyn.cli.outputs import check_outputs, emit_json, report_run
 from camdyn.errors import ParameterError
-from camdyn.params.config import (
-    SCHEMA,
-    list_presets,
-    preset_text,
-    system_to_toml,
-)
+from camdyn.params.catalog import preset_file, preset_kind, preset_meta, preset_names
+from camdyn.params.config import SCHEMA, system_to_toml
 from camdyn.params.mechanism import is_mechanism
-from camdyn.params.profiles import declared_kind, is_translating, list_translating_presets, translating_preset_text
+from camdyn.params.profiles import declared_kind, is_translating
 from camdyn.params.units import parse_quantity, parse_speed
 from camdyn.systems.model_files import is_model_reference
 
 
 def presets_list(ctx: typer.Context):
-    """List the presets (name and citation)."""
+    """List every bundled preset: its name (what a command takes in place of a file), its
+    kind and its description. 'camdyn presets NAME' prints one."""
     if ctx.invoked_subcommand is not None:
         return
-    import tomllib
-    table = Table("preset", "description")
-    for name in list_presets():
-        meta = tomllib.loads(preset_text(name)).get("preset", {})
-        table.add_row(name, meta.get("description", ""))
-    for name in list_translating_presets():
-        meta = tomllib.loads(translating_preset_text(name)).get("preset", {})
-        table.add_row(name, meta.get("description", ""))
+    names = preset_names()
+    table = Table()
+    table.add_column("preset", no_wrap=True, min_width=max(map(len, names)))
+    table.add_column("kind", no_wrap=True, min_width=max(len(preset_kind(name)) for name in names))
+    table.add_column("description")
+    for name in names:
+        table.add_row(name, preset_kind(name), str(preset_meta(name).get("description", "")))
     console.print(table)
 
 
 def presets_show(name: str):
-    """Print a preset as TOML (copy it to start your own configuration); a mechanism's
-    file is printed whole, its system included, every key in SI units."""
+    """Print a preset's file as shipped (copy it to start your own configuration; a
+    tabulated profile's CSV file lies beside it); given a TOML file, print it written
+    back, a mechanism's whole, its system included, every key in SI units."""
+    if name in preset_names():
+        typer.echo(preset_file(name).read_text(encoding="utf-8"), nl=False)
+        return
     if is_mechanism(name):
         from camdyn.cli.mechanism import show_mechanism
         typer.echo(show_mechanism(name))
         return
-    if name in list_translating_presets():
-        typer.echo(translating_preset_text(name))
-        return
-    typer.echo(preset_text(name) if name in list_presets() else system_to_toml(load_source(name, None)))
+    typer.echo(system_to_toml(load_source(name, None)))
 
 
 def presets_keys():

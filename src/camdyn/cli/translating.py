@@ -35,6 +35,7 @@ def translating_summary(ds, follower) -> dict:
     liftoff = liftoff_speed(follower, samples=20_000)
     return {
         "preset": ds.attrs.get("name", ""),
+        "speed_hz": speed / (2.0 * math.pi),
         "speed_rpm": 60.0 * speed / (2.0 * math.pi),
         "revolutions": revolutions,
         "contact": ds.attrs["contact"],

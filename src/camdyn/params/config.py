@@ -30,6 +30,7 @@ from importlib import resources
 from pathlib import Path
 
 from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyError
+from camdyn.params.catalog import preset_kind, preset_names, presets_of_kind, resolve, unknown_preset
 from camdyn.params.laws import lookup
 from camdyn.params.profile_table import profile_spec
 from camdyn.params.profiles import SCHEMA as PROFILE_SCHEMA
@@ -56,7 +57,7 @@ SCHEMA: dict[str, tuple[str, str]] = {
     RADIUS_KEY: ("m", "radius rc of a circular cam (sets both semi-axes)"),
     **{p.key: (p.unit, p.meaning) for p in PARAMETERS},
 }
-_META_KEYS = {"preset.name", "preset.citation", "preset.description"}
+_META_KEYS = {"preset.name", "preset.citation", "preset.description", "preset.provenance"}
 #: Keys of the ``[profile]`` table: a cam profile made for a flat face in place of the
 #: ellipse (:attr:`camdyn.params.system.System.profile`), as a translating follower's.
 PROFILE_KEYS = tuple(key for key in PROFILE_SCHEMA if key.startswith("profile.")) + ("profile.face",)
@@ -184,11 +185,9 @@ def _arguments(table: str, values: dict) -> dict:
 
 
 def list_presets() -> list[str]:
-    """Names of the bundled presets of the rocking follower (those of the translating
-    follower: :func:`camdyn.params.profiles.list_translating_presets`)."""
-    folder = resources.files("camdyn.params.presets")
-    translating = set(list_translating_presets())
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml") and p.name[:-5] not in translating)
+    """Names of the bundled presets of the thesis's rocking flat-faced follower on its
+    ellipse (every preset, of every kind: :func:`camdyn.params.catalog.preset_names`)."""
+    return presets_of_kind("cam-follower")
 
 
 def preset_text(name: str) -> str:
@@ -202,10 +201,15 @@ def preset_text(name: str) -> str:
 
 def read_table(source: str | Path) -> tuple[dict, str, str]:
     """Read a preset name or TOML file path; return (dotted values, name, citation)."""
-    path = Path(str(source))
     if str(source) in list_translating_presets():
         raise PresetError(f"{str(source)!r} is a preset of the translating follower, not of the rocking one; "
                           "run it with 'camdyn simulate' or load it with camdyn.io.lift_table.load_translating")
+    if str(source) in preset_names() and preset_kind(str(source)) not in ("cam-follower", "cam-follower, profile"):
+        raise PresetError(f"{str(source)!r} is a preset of the kind {preset_kind(str(source))!r}, not of the "
+                          "rocking flat-faced follower of the thesis that this entry takes; 'camdyn simulate' "
+                          "takes every kind")
+    source = resolve(source)
+    path = Path(str(source))
     if str(source) in list_presets():
         text, name = preset_text(str(source)), str(source)
     elif path.suffix == ".toml" or path.exists():
@@ -219,8 +223,7 @@ def read_table(source: str | Path) -> tuple[dict, str, str]:
         except OSError as exc:
             raise PresetError(f"{source}: cannot be read ({exc.strerror or exc})") from None
     else:
-        preset_text(str(source))  # raises a PresetError with suggestions
-        raise AssertionError("unreachable")
+        raise unknown_preset(str(source))
     try:
         table = loads_toml(text, source)
     except tomllib.TOMLDecodeError as exc:
@@ -310,6 +313,7 @@ def read_system(source: str | Path, overrides: dict | None = None) -> tuple[Syst
         taken from the TOML file's folder. None without a ``[profile]`` table.
     """
     flat, name, citation = read_table(source)
+    source = resolve(source)
     overrides = dict(overrides or {})
     for key in overrides:
         if key not in SCHEMA and not key.startswith("profile."):

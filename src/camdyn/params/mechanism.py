@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from camdyn.errors import ParameterError, UnitError, UnknownKeyError
+from camdyn.params.catalog import resolve
 from camdyn.params.config import loads_toml, read_toml_file
 from camdyn.params.units import parse_quantity, parse_speed
 
@@ -112,7 +113,7 @@ SCHEMA: dict[str, Key] = {
                                                 "both, or a list of two); given, the contacts stick",
                                   "non-negative"),
 }
-_META_KEYS = ("preset.name", "preset.citation", "preset.description")
+_META_KEYS = ("preset.name", "preset.citation", "preset.description", "preset.provenance")
 #: Keys under their own table only (the drive's by drive kind, the rest by mechanism kind).
 _SHAFT_KEYS = ("drive.shaft_inertia", "drive.kind", "drive.bearing_viscous", "drive.bearing_coulomb",
                "drive.bearing_speed", "drive.initial_speed")
@@ -310,7 +311,7 @@ def read_mechanism(source: str | Path, overrides: dict | None = None) -> Mechani
     -------
     MechanismSpec
     """
-    path = Path(str(source))
+    path = Path(str(resolve(source)))
     flat = _table(path)
     flat.update(overrides or {})
     try:
@@ -320,8 +321,8 @@ def read_mechanism(source: str | Path, overrides: dict | None = None) -> Mechani
 
 
 def is_mechanism(source: str | Path) -> bool:
-    """Whether ``source`` is a readable TOML file with a ``[mechanism]`` table."""
-    path = Path(str(source))
+    """Whether ``source`` is a readable TOML file (or a preset) with a ``[mechanism]`` table."""
+    path = Path(str(resolve(source)))
     try:
         return path.is_file() and isinstance(loads_toml(path.read_text(encoding="utf-8"), source).get("mechanism"),
                                              dict)

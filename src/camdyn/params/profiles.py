@@ -37,10 +37,10 @@ import difflib
 import math
 import tomllib
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 
 from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyError
+from camdyn.params.catalog import preset_file, presets_of_kind, resolve
 from camdyn.params.follower_friction import FRICTION_SCHEMA, check_friction
 from camdyn.params.toml_text import flatten, loads_toml
 from camdyn.params.units import parse_quantity, parse_speed, registry
@@ -119,7 +119,7 @@ ARC_KEYS = {"span": ("angle", _REQUIRED, "angular span of the arc"),
             "centre_distance": ("m", _REQUIRED, "distance d of the arc's centre from the cam's axis"),
             "centre_angle": ("angle", 0.0, "direction phi_c of the arc's centre in the cam's frame"),
             "radius": ("m", _REQUIRED, "the arc's radius rho")}
-_META_KEYS = ("preset.name", "preset.citation", "preset.description")
+_META_KEYS = ("preset.name", "preset.citation", "preset.description", "preset.provenance")
 #: Keys that must not be negative, and those that must be positive.
 _NOT_NEGATIVE = ("follower.damping", "follower.roller_radius", "spring.stiffness", "spring.preload",
                  "contact.capture_velocity", "contact.stiffness", "contact.damping", "environment.gravity",
@@ -400,12 +400,7 @@ def spec_from_table(flat: dict, name: str = "custom", citation: str = "", folder
 
 def list_translating_presets() -> list[str]:
     """Names of the bundled presets whose ``[follower]`` is translating."""
-    folder = resources.files("camdyn.params.presets")
-    names = []
-    for item in folder.iterdir():
-        if item.name.endswith(".toml") and _kind_in(item.read_text(encoding="utf-8")) == TRANSLATING:
-            names.append(item.name[:-5])
-    return sorted(names)
+    return presets_of_kind(TRANSLATING)
 
 
 def translating_preset_text(name: str) -> str:
@@ -413,7 +408,7 @@ def translating_preset_text(name: str) -> str:
     if name not in list_translating_presets():
         raise PresetError(f"no translating-follower preset named {name!r} "
                           f"(available: {', '.join(list_translating_presets())})")
-    return resources.files("camdyn.params.presets").joinpath(f"{name}.toml").read_text(encoding="utf-8")
+    return preset_file(name).read_text(encoding="utf-8")
 
 
 def _kind_in(text: str, source="TOML") -> str | None:
@@ -427,9 +422,7 @@ def _kind_in(text: str, source="TOML") -> str | None:
 
 
 def _source_text(source: str | Path) -> tuple[str, str, Path | None]:   # (text, name, folder of relative paths)
-    if str(source) in list_translating_presets():
-        return translating_preset_text(str(source)), str(source), None
-    path = Path(str(source))
+    path = Path(str(resolve(source)))
     if not path.is_file():
         raise PresetError(f"{str(source)!r} is neither a translating-follower preset "
                           f"({', '.join(list_translating_presets())}) nor a TOML file")
@@ -442,8 +435,9 @@ def _source_text(source: str | Path) -> tuple[str, str, Path | None]:   # (text,
 
 
 def declared_kind(source: str | Path) -> str | None:
-    """The ``[follower] kind`` a TOML file declares (None without one, or where unreadable)."""
-    path = Path(str(source))
+    """The ``[follower] kind`` a TOML file or preset declares (None without one, or where
+    unreadable)."""
+    path = Path(str(resolve(source)))
     try:
         return _kind_in(path.read_text(encoding="utf-8"), source) if path.is_file() else None
     except (OSError, UnicodeDecodeError):
@@ -453,9 +447,7 @@ def declared_kind(source: str | Path) -> str | None:
 def is_translating(source: str | Path) -> bool:
     """Whether a preset name or TOML file describes a translating follower (its
     ``[follower] kind`` is ``"translating"``); False for anything unreadable."""
-    if str(source) in list_translating_presets():
-        return True
-    path = Path(str(source))
+    path = Path(str(resolve(source)))
     try:
         return path.is_file() and _kind_in(path.read_text(encoding="utf-8")) == TRANSLATING
     except (OSError, UnicodeDecodeError):

@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from camdyn.errors import ParameterError, UnitError, UnknownKeyError
+from camdyn.params.catalog import resolve
 from camdyn.params.config import read_toml_file
 from camdyn.params.follower_friction import FRICTION_SCHEMA, check_friction
 from camdyn.params.profile_table import profile_spec
@@ -92,7 +93,7 @@ CONTACT_LAWS = ("rigid", "compliant", "hertz")
 _HERTZ = tuple(key for key in HERTZ_KEYS if key in SCHEMA)
 #: Keys passed to the translating follower's reader as they are.
 _PASSED = ("profile.", "motion.")
-_META_KEYS = ("preset.name", "preset.citation", "preset.description")
+_META_KEYS = ("preset.name", "preset.citation", "preset.description", "preset.provenance")
 
 
 @dataclass(frozen=True)
@@ -261,6 +262,7 @@ def read_rocking(source: str | Path, overrides: dict | None = None) -> RockingSp
     -------
     RockingSpec
     """
+    source = resolve(source)
     path = Path(str(source))
     flat = read_toml_file(source)
     flat.update(overrides or {})
