@@ -48,7 +48,7 @@ def unknown_preset(name: str) -> PresetError:
     """The error for a name that is neither a preset nor a file, naming the close presets."""
     close = difflib.get_close_matches(name, preset_names(), n=3, cutoff=0.5)
     hint = f"; did you mean {', '.join(close)}?" if close else "; 'camdyn presets' lists them"
-    return PresetError(f"no preset or configuration file named {name!r}{hint}")
+    return PresetError(f"no preset named {name!r} and no such configuration file{hint}")
 
 
 def preset_file(name: str) -> Path:
