@@ -110,3 +110,14 @@ def test_an_unknown_name_is_refused_with_close_names(command):
     status, out, err = run(command[0], "drum-brak", *command[1:])
     assert status == 2 and err.count("\n") == 1, (out, err)
     assert "'drum-brak'" in err and "drum-brake" in err, err
+
+
+@pytest.mark.parametrize("name", ["drum-brake", "sundar2014-impact"])
+def test_a_sweep_spec_takes_a_preset_by_name_as_its_file(name):
+    from camdyn.sweeps.spec import spec_from_dict
+
+    vary = [{"key": "motion.speed" if name.startswith("sundar") else "drive.torque",
+             "values": ["10 Hz", "11 Hz"] if name.startswith("sundar") else ["0.1 N*m", "0.2 N*m"]}]
+    by_name = spec_from_dict({"system": {"source": name}, "vary": vary})
+    by_file = spec_from_dict({"system": {"source": str(FOLDER.joinpath(f"{name}.toml"))}, "vary": vary})
+    assert by_name.system_toml == by_file.system_toml and by_name.points == 2
