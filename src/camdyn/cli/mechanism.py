@@ -73,10 +73,10 @@ def _common(ds, kind: str, revolutions: float) -> dict:
     if contact.ndim == 1:
         contact = contact[:, None]
     landings = int(np.count_nonzero(contact[1:] & ~contact[:-1]))
-    if kind == "flexible-pivot":
-        speed = float(ds.attrs["speed_hz"])
-    else:
+    if "mean_cam_speed" in ds.attrs:   # a driven shaft: its mean speed [rad/s]
         speed = abs(float(ds.attrs["mean_cam_speed"])) / (2.0 * math.pi)
+    else:
+        speed = float(ds.attrs["speed_hz"])
     return {"speed_hz": speed, "contact_fraction": float(contact.mean()), "impacts": landings,
             "impacts_per_revolution": landings / revolutions if revolutions else 0.0}
 
