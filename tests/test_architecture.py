@@ -381,16 +381,16 @@ def test_checker_undocumented_modules(page, missing):
     assert undocumented_modules(page, {"io": ["atomic.py", "netcdf.py"]}) == missing
 
 
-def readme_missing_folders(readme: str, folders: list[str]) -> list[str]:
-    """Folders of the package that the README's layout table has no row for (a row
-    starts ``| `folder/` |``)."""
-    return [folder for folder in folders if f"\n| `{folder}/` |" not in readme]
+def layout_missing_folders(page: str, folders: list[str]) -> list[str]:
+    """Folders of the package that the architecture page's layout table has no row for
+    (a row starts ``| `folder/` |``)."""
+    return [folder for folder in folders if f"\n| `{folder}/` |" not in page]
 
 
-def test_readme_layout_names_every_folder():
+def test_layout_table_names_every_folder():
     folders = sorted(p.name for p in (SRC / PACKAGE).iterdir() if p.is_dir() and p.name != "__pycache__")
-    assert readme_missing_folders((ROOT / "README.md").read_text(encoding="utf-8"), folders) == []
+    assert layout_missing_folders((ROOT / "docs" / "architecture.md").read_text(encoding="utf-8"), folders) == []
 
 
-def test_checker_readme_missing_folders():
-    assert readme_missing_folders("x\n| `io/` | files |\n", ["io", "cli"]) == ["cli"]
+def test_checker_layout_missing_folders():
+    assert layout_missing_folders("x\n| `io/` | files |\n", ["io", "cli"]) == ["cli"]

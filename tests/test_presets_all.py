@@ -121,3 +121,13 @@ def test_a_sweep_spec_takes_a_preset_by_name_as_its_file(name):
     by_name = spec_from_dict({"system": {"source": name}, "vary": vary})
     by_file = spec_from_dict({"system": {"source": str(FOLDER.joinpath(f"{name}.toml"))}, "vary": vary})
     assert by_name.system_toml == by_file.system_toml and by_name.points == 2
+
+
+def test_the_parameter_sets_page_lists_every_preset():
+    from pathlib import Path
+
+    from camdyn.params import catalog
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "presets.md").read_text(encoding="utf-8")
+    missing = [name for name in catalog.preset_names() if f"| `{name}` |" not in page]
+    assert missing == [], f"docs/presets.md has no row for {missing}"

@@ -32,7 +32,10 @@ JsonOption = typer.Option(False, "--json", help="Print JSON on standard output (
                                                 "messages go to standard error.")
 ForceOption = typer.Option(False, "--force", help="Overwrite output files that already exist.")
 
-COMPILE_NOTICE = "compiling camdyn's core for this machine (first run only, about a minute)..."
+#: The first compile of the core took 387 s on the 2-core development machine
+#: (benchmarks/bench_first_run.py).
+COMPILE_NOTICE = ("compiling camdyn's core for this machine, once (about 6 minutes on 2 cores; "
+                  "'camdyn compile' does it ahead)...")
 #: Modules whose compiled functions are the core: compiling any of them is the long wait.
 _CORE_MODULES = ("camdyn.integrator.", "camdyn.sweeps.kernel", "camdyn.identification.impact_kernel")
 _notice = {"shown": False}
