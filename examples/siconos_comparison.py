@@ -42,14 +42,16 @@ def data(siconos: dict) -> dict:
     [m] at 358 rpm; panel (b): the sections (gap [m], relative velocity [m/s]) at 660 rpm."""
     series = siconos["figures"]["358"]
     w = 358 * 2 * math.pi / 60
-    ds = simulate_translating(alzate_rig(), w, 1.0, sample_rate=4e3, phase=PHASE, rtol=1e-12, atol=1e-14)
+    ds = simulate_translating(alzate_rig(), w / (2 * math.pi), 1.0, sample_rate=4e3, phase=PHASE, rtol=1e-12,
+                              atol=1e-14)
     panel_a = {"time": ds.time.values.tolist(), "camdyn": ds.x.values.tolist(), "lift": ds.lift.values.tolist(),
                "siconos_time": series["time_s"],
                "siconos": (np.asarray(series["gap_m"]) + np.asarray(series["lift_m"])).tolist(),
                "steps_per_revolution": max(int(k) for k in siconos["speeds"]["358"])}
     w = 660 * 2 * math.pi / 60
     period = 2 * math.pi / w
-    ds = simulate_translating(alzate_rig(), w, (200 + SECTION_REVOLUTIONS) * period, sample_rate=4 / period,
+    ds = simulate_translating(alzate_rig(), w / (2 * math.pi), (200 + SECTION_REVOLUTIONS) * period,
+                              sample_rate=4 / period,
                               phase=PHASE)
     ours = np.c_[ds.gap.values[::4], (ds.x_dot.values - ds.lift_rate.values)[::4]][200:]
     panel_b = {"camdyn": ours.tolist(),

@@ -60,7 +60,7 @@ def corner(rig, orbit):
     """The orbit's impact nearest to a joint of the cam profile: its cam angle [rad] and
     its distance from the joint [rad], from a simulation of one orbit period."""
     period = orbit.period
-    ds = simulate_translating(rig, orbit.parameter, period, sample_rate=64 * orbit.periods / period,
+    ds = simulate_translating(rig, orbit.parameter / (2 * math.pi), period, sample_rate=64 * orbit.periods / period,
                               initial_state=orbit.state, rtol=RTOL)
     angles = (ds["event_time"].values[ds["event_kind"].values == "impact"] * orbit.parameter) % (2.0 * math.pi)
     joints = np.r_[rig.profile.joints, 2.0 * math.pi]

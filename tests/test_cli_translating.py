@@ -34,7 +34,8 @@ def test_alzate_preset_summary_and_outputs(tmp_path):
     # the same run through the Python interface: counts and the largest force agree
     rig, spec = load_translating("alzate")
     omega = 358 * 2 * math.pi / 60
-    ds = simulate_translating(rig, omega, 6 * 2 * math.pi / omega, sample_rate=2000.0, phase=math.pi / 2)
+    ds = simulate_translating(rig, omega / (2 * math.pi), 6 * 2 * math.pi / omega, sample_rate=2000.0,
+                              phase=math.pi / 2)
     kinds = ds.event_kind.values
     assert summary["impacts"] == np.count_nonzero(kinds == "impact") > 0
     assert summary["separations"] == np.count_nonzero(kinds == "separation") >= 1

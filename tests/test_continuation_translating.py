@@ -42,7 +42,7 @@ def _sections(rig, rpm, revolutions, per_revolution=8, initial_state=None):
     follower resting on the cam (or from ``initial_state``), and the run."""
     omega = rpm * RPM
     period = 2.0 * math.pi / omega
-    ds = simulate_translating(rig, omega, revolutions * period, sample_rate=per_revolution / period,
+    ds = simulate_translating(rig, omega / (2 * math.pi), revolutions * period, sample_rate=per_revolution / period,
                               initial_state=initial_state)
     states = np.c_[ds["x"].values, ds["x_dot"].values][::per_revolution]
     return states, ds
@@ -63,7 +63,8 @@ def test_the_700_rpm_impact_velocity_agrees_with_siconos(rig, orbit700):
     the spread of Siconos's average over its three steps plus its largest excursion from
     that average at the finest step (the measure of tests/test_siconos_benchmark.py)."""
     omega = 700.0 * RPM
-    ds = simulate_translating(rig, omega, 2.0 * math.pi / omega, sample_rate=64 * omega / (2.0 * math.pi),
+    ds = simulate_translating(rig, omega / (2 * math.pi), 2.0 * math.pi / omega,
+                              sample_rate=64 * omega / (2.0 * math.pi),
                               initial_state=orbit700.state)
     impacts = ds["event_velocity"].values[ds["event_kind"].values == "impact"]
     assert impacts.size == 1
@@ -99,7 +100,8 @@ def test_the_monodromy_matches_differences_of_perturbed_simulations(rig, orbit70
         for sign in (1.0, -1.0):
             start = orbit700.state.copy()
             start[j] += sign * h
-            ds = simulate_translating(rig, omega, period, sample_rate=4.0 / period, initial_state=start, rtol=1e-12,
+            ds = simulate_translating(rig, omega / (2 * math.pi), period, sample_rate=4.0 / period,
+                                      initial_state=start, rtol=1e-12,
                                       atol=1e-14)
             ends.append(np.array([ds["x"].values[-1], ds["x_dot"].values[-1]]))
         columns.append((ends[0] - ends[1]) / (2.0 * h))
@@ -132,7 +134,8 @@ def test_an_orbit_captured_by_the_cam_has_zero_multipliers(rig):
     assert np.array_equal(orbit.multipliers, np.zeros(2)) and orbit.impacts_per_period > 50
     period = 2.0 * math.pi / omega
     for start in (None, (0.2, 0.0)):
-        ds = simulate_translating(rig, omega, period, sample_rate=8.0 / period, phase=phase, initial_state=start)
+        ds = simulate_translating(rig, omega / (2 * math.pi), period, sample_rate=8.0 / period, phase=phase,
+                                  initial_state=start)
         assert (ds["event_kind"].values == "capture").sum() == 1
         end = np.array([ds["x"].values[-1], ds["x_dot"].values[-1]])
         assert np.allclose(end, orbit.state, rtol=1e-6, atol=0.0)

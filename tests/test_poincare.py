@@ -35,7 +35,8 @@ def test_one_revolution_map_continues_the_run(rig, tmp_path):
     rpm = 660.0
     section = poincare_section(rig, [rpm], transient=0, revolutions=3)
     omega = rpm * 2 * math.pi / 60
-    ds = simulate_translating(rig, omega, 3 * 2 * math.pi / omega, sample_rate=128 * omega / (2 * math.pi))
+    ds = simulate_translating(rig, omega / (2 * math.pi), 3 * 2 * math.pi / omega,
+                              sample_rate=128 * omega / (2 * math.pi))
     np.testing.assert_allclose(section.x.values[0], ds.x.values[128::128], rtol=0, atol=1e-12)
     np.testing.assert_allclose(section.x_dot.values[0], ds.x_dot.values[128::128], rtol=0, atol=1e-11)
     assert np.all(section.x.values[0] > 0.0)     # in flight at cam angle 0

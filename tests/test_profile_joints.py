@@ -52,7 +52,7 @@ def test_a_continuous_rigid_run_completes_and_follows_the_restarted_map(rig, rpm
     drift apart as the motion stretches them (below)."""
     w = omega(rpm)
     period = 2.0 * math.pi / w
-    ds = simulate_translating(rig, w, REVOLUTIONS * period, sample_rate=16 / period)
+    ds = simulate_translating(rig, w / (2 * math.pi), REVOLUTIONS * period, sample_rate=16 / period)
     assert ds.attrs["status"] == "completed"
     section = poincare_section(rig, [rpm], transient=0, revolutions=REVOLUTIONS)
     assert np.all(section.rtol.values == 1e-10)   # no revolution needed a fallback tolerance
@@ -70,7 +70,7 @@ def test_a_continuous_rigid_run_completes_where_captures_are_rare(rig, rpm):
     2e-7 m at 210 rpm)."""
     w = omega(rpm)
     period = 2.0 * math.pi / w
-    ds = simulate_translating(rig, w, REVOLUTIONS * period, sample_rate=16 / period)
+    ds = simulate_translating(rig, w / (2 * math.pi), REVOLUTIONS * period, sample_rate=16 / period)
     assert ds.attrs["status"] == "completed"
     section = poincare_section(rig, [rpm], transient=0, revolutions=REVOLUTIONS)
     np.testing.assert_allclose(section.x.values[0], ds.x.values[16::16], rtol=0, atol=1e-5)
@@ -86,7 +86,7 @@ def test_the_follower_separates_exactly_at_the_joint(rig):
     joint_time = (FLANK_END - PHASE) / w   # the rig's force is written at the phase PHASE
     assert rig_force(joint_time - 1e-9, w) > 0.0 > rig_force(joint_time + 1e-9, w)
     period = 2.0 * math.pi / w
-    ds = simulate_translating(rig, w, 10 * period, sample_rate=8 / period)
+    ds = simulate_translating(rig, w / (2 * math.pi), 10 * period, sample_rate=8 / period)
     angles = (w * ds.event_time.values[ds.event_kind.values == "separation"]) % (2.0 * math.pi)
     at_joint = angles[np.abs(angles - FLANK_END) < 1e-3]
     assert at_joint.size == 10
@@ -157,7 +157,7 @@ def test_sustained_contact_converges_with_the_tolerance_across_joints():
     expected = scipy_solution(damping, times)
     errors = []
     for rtol in (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12):
-        ds = simulate_translating(follower, SPEED, period, sample_rate=256 / period,
+        ds = simulate_translating(follower, SPEED / (2 * math.pi), period, sample_rate=256 / period,
                                   initial_state=(-PRELOAD / CONTACT, 0.0), rtol=rtol, atol=rtol * 1e-3)
         assert ds.attrs["status"] == "completed" and ds.event_kind.size == 0
         errors.append(np.abs(ds.x.values - expected[:, 0]).max())
@@ -171,7 +171,8 @@ def test_rigid_sustained_contact_at_rtol_1e_13_completes_and_matches_the_referen
     completes, with the events of the independent event-driven SciPy solution of
     tests/test_translating_follower.py, within 1e-8 s, and its position within 1e-7 m."""
     w = omega(130.0)
-    ds = simulate_translating(alzate_rig(), w, 0.35, sample_rate=2000, phase=PHASE, rtol=1e-13, atol=1e-15)
+    ds = simulate_translating(alzate_rig(), w / (2 * math.pi), 0.35, sample_rate=2000, phase=PHASE, rtol=1e-13,
+                              atol=1e-15)
     assert ds.attrs["status"] == "completed"
     events, pieces = reference(w, 0.35)
     events = [(t, k) for t, k in events if k != "graze"]

@@ -54,7 +54,7 @@ def test_simulate_on_the_example_file(tmp_path):
     assert document["schema"] == "camdyn.simulate-rocking/1"
     summary = document["summary"]
     omega = 650 * 2 * math.pi / 60
-    ds = simulate_rocking(python_follower(), omega, 3 * 2 * math.pi / omega, sample_rate=2000.0)
+    ds = simulate_rocking(python_follower(), omega / (2 * math.pi), 3 * 2 * math.pi / omega, sample_rate=2000.0)
     kinds = ds.event_kind.values
     assert summary["impacts"] == np.count_nonzero(kinds == "impact") > 10
     assert summary["separations"] == np.count_nonzero(kinds == "separation") >= 2

@@ -173,7 +173,8 @@ def test_a_revolution_with_impacts_matches_an_independent_solution(kind):
     duration = 2 * math.pi / w
     radius = RADIUS + (0.0 if kind == "knife-point" else ROLLER)
     psi0 = closed_form(0.0, radius=radius)[0] + DROP
-    ds = simulate_rocking(follower, w, duration, sample_rate=4000, initial_state=(psi0, 0.0), rtol=1e-12,
+    ds = simulate_rocking(follower, w / (2 * math.pi), duration, sample_rate=4000, initial_state=(psi0, 0.0),
+                          rtol=1e-12,
                           atol=1e-14)
     events, pieces = reference(kind, w, duration, ds.attrs["rest_angle_rad"])
     kinds = [k for _, k in events]
@@ -202,7 +203,8 @@ def test_a_unit_lever_leaves_the_translating_hertz_law_as_it_is():
     runs = []
     for lever in (None, unit):
         follower = TranslatingFollower(profile, 0.02, 50.0, 0.5, contact="hertz", hertz=law, lever=lever)
-        runs.append(simulate_translating(follower, 150.0, 0.1, sample_rate=2000, initial_state=(0.012, 0.0)))
+        runs.append(simulate_translating(follower, 150.0 / (2 * math.pi), 0.1, sample_rate=2000,
+                                         initial_state=(0.012, 0.0)))
     assert runs[0].event_time.size >= 2
     for name in ("x", "x_dot", "contact_force"):
         np.testing.assert_array_equal(runs[0][name].values, runs[1][name].values)
@@ -225,14 +227,14 @@ def test_the_stiffening_contact_converges_to_the_rigid_impacts():
     w = 0.5 * rocking_liftoff_speed(rigid)
     start = (closed_form(0.0)[0] + DROP, 0.0)
     options = {"sample_rate": 1000, "initial_state": start, "rtol": 1e-11, "atol": 1e-13}
-    ds = simulate_rocking(rigid, w, 0.05, **options)
+    ds = simulate_rocking(rigid, w / (2 * math.pi), 0.05, **options)
     impacts = ds.event_time.values[ds.event_kind.values == "impact"][:3]
     assert impacts.size == 3
     errors = []
     for stiffness in (1e3, 1e4, 1e5, 1e6):
         arm = RockingFollower(geometry, INERTIA, STIFFNESS, PRELOAD, contact="compliant",
                               contact_stiffness=stiffness, contact_damping=_penalty_damping(stiffness))
-        run = simulate_rocking(arm, w, 0.05, **options)
+        run = simulate_rocking(arm, w / (2 * math.pi), 0.05, **options)
         onsets = run.event_time.values[run.event_kind.values == "contact onset"][:3]
         errors.append(np.abs(onsets - impacts).max())
     assert all(a > b for a, b in zip(errors, errors[1:])), errors
@@ -329,7 +331,7 @@ def test_simulate_runs_a_compliant_configuration_and_refuses_a_bad_law():
     follower, spec = load_rocking(EXAMPLE, {"contact.law": "compliant", "contact.stiffness": "1e4 N*m",
                                             "contact.damping": "0.02 N*m*s"})
     w = spec.profile.speed
-    ds = simulate_rocking(follower, w, 2 * math.pi / w, sample_rate=2000.0, rtol=1e-10)
+    ds = simulate_rocking(follower, w / (2 * math.pi), 2 * math.pi / w, sample_rate=2000.0, rtol=1e-10)
     onsets = int(np.count_nonzero(ds.event_kind.values == "contact onset"))
     assert summary["contact_law"] == "compliant" and summary["contact_onsets"] == onsets >= 1
     assert summary["impacts"] == 0

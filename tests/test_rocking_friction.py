@@ -103,8 +103,8 @@ def test_without_friction_the_rocking_arm_is_reproduced_bitwise():
     follower = arm_on_circle("roller")
     w = 1.15 * rocking_liftoff_speed(follower)
     duration = 3 * 2 * math.pi / w
-    plain = simulate_rocking(follower, w, duration, sample_rate=4000)
-    rough = simulate_rocking_friction(follower, FollowerFriction(0.0), w, duration, sample_rate=4000)
+    plain = simulate_rocking(follower, w / (2 * math.pi), duration, sample_rate=4000)
+    rough = simulate_rocking_friction(follower, FollowerFriction(0.0), w / (2 * math.pi), duration, sample_rate=4000)
     assert plain.attrs["solver_events"] > 10
     for name in ("psi", "psi_dot", "event_time"):
         np.testing.assert_array_equal(rough[name].values, plain[name].values)
@@ -125,8 +125,9 @@ def test_friction_leaves_the_arm_angle_unchanged(face):
     w = 1.15 * rocking_liftoff_speed(follower)
     duration = 2 * 2 * math.pi / w
     inertia = 2e-7 if face == "roller" else 0.0
-    plain = simulate_rocking(follower, w, duration, sample_rate=4000)
-    rough = simulate_rocking_friction(follower, FollowerFriction(0.4, 0.3, inertia), w, duration, sample_rate=4000)
+    plain = simulate_rocking(follower, w / (2 * math.pi), duration, sample_rate=4000)
+    rough = simulate_rocking_friction(follower, FollowerFriction(0.4, 0.3, inertia), w / (2 * math.pi), duration,
+                                      sample_rate=4000)
     np.testing.assert_allclose(rough.psi.values, plain.psi.values, rtol=0, atol=1e-15)
     keep = rough.event_kind.values
     shared = np.isin(keep, ("impact", "capture", "separation", "graze"))
@@ -150,7 +151,7 @@ def test_knife_edge_normal_force_and_slip_against_the_closed_form():
     mu = 0.3
     follower = arm_on_circle("knife")
     w = 0.6 * rocking_liftoff_speed(follower)
-    ds = simulate_rocking_friction(follower, FollowerFriction(mu), w, 2 * math.pi / w, sample_rate=2000)
+    ds = simulate_rocking_friction(follower, FollowerFriction(mu), w / (2 * math.pi), 2 * math.pi / w, sample_rate=2000)
     assert np.all(ds.in_contact.values == 1) and ds.event_time.size == 0
     rest = rest_angle(RADIUS)
     for t, normal, friction, slip, moment_run, fx, fy in zip(
@@ -182,7 +183,8 @@ def test_roller_spin_up_on_a_dwell_ends_at_the_closed_form_time():
     geometry = RockingGeometry(profile, -0.07, 0.04, 0.07, ROLLER, 1)
     follower = RockingFollower(geometry, INERTIA, STIFFNESS, PRELOAD)
     start = math.radians(305.0)
-    ds = simulate_rocking_friction(follower, FollowerFriction(0.3, mu, inertia), w, math.radians(50.0) / w,
+    ds = simulate_rocking_friction(follower, FollowerFriction(0.3, mu, inertia), w / (2 * math.pi),
+                                   math.radians(50.0) / w,
                                    sample_rate=20000, phase=start, roller_speed=0.0)
     pivot, pitch = np.array([-0.07, 0.04]), base + ROLLER
     psi, _, e1, d = intersection(pivot, 0.07, np.zeros(2), pitch)
@@ -278,7 +280,8 @@ def test_roller_set_down_without_spin_against_an_independent_solution():
     follower = arm_on_circle("roller")
     w = 0.6 * rocking_liftoff_speed(follower)
     duration = 2 * math.pi / w
-    ds = simulate_rocking_friction(follower, FollowerFriction(0.2, 0.15, 5e-7), w, duration, sample_rate=2000,
+    ds = simulate_rocking_friction(follower, FollowerFriction(0.2, 0.15, 5e-7), w / (2 * math.pi), duration,
+                                   sample_rate=2000,
                                    roller_speed=0.0, rtol=1e-12, atol=1e-14)
     events, pieces = reference(w, duration, 0.2, 0.15, 5e-7)
     assert [k for _, k in events] == list(ds.event_kind.values)
@@ -303,18 +306,18 @@ def test_refusals_name_the_parameter():
     with pytest.raises(ParameterError, match="must not exceed friction.static"):
         FollowerFriction(0.1, 0.2)
     with pytest.raises(ParameterError, match="friction.roller_inertia: a knife edge has no roller"):
-        simulate_rocking_friction(knife, FollowerFriction(0.1, roller_inertia=1e-6), 40.0, 0.01)
+        simulate_rocking_friction(knife, FollowerFriction(0.1, roller_inertia=1e-6), 40.0 / (2 * math.pi), 0.01)
     compliant = RockingFollower(roller.geometry, INERTIA, STIFFNESS, PRELOAD, contact="compliant",
                                 contact_stiffness=1e4)
     with pytest.raises(ParameterError, match="needs the rigid contact law"):
-        simulate_rocking_friction(compliant, FollowerFriction(0.1), 40.0, 0.01)
+        simulate_rocking_friction(compliant, FollowerFriction(0.1), 40.0 / (2 * math.pi), 0.01)
     # pressure angles from -7 to 19 deg: cos(phi) - mu_k sin(phi) reaches zero for mu_k above 2.93
     with pytest.raises(GeometryError, match=r"the arm jams at cam angle \d+\.\d+ deg"):
-        simulate_rocking_friction(knife, FollowerFriction(3.0), 40.0, 0.01)
+        simulate_rocking_friction(knife, FollowerFriction(3.0), 40.0 / (2 * math.pi), 0.01)
     with pytest.raises(ParameterError, match="roller_speed: a knife edge"):
-        simulate_rocking_friction(knife, FollowerFriction(0.1), 40.0, 0.01, roller_speed=3.0)
+        simulate_rocking_friction(knife, FollowerFriction(0.1), 40.0 / (2 * math.pi), 0.01, roller_speed=3.0)
     with pytest.raises(ParameterError, match="expected a RockingFollower"):
-        simulate_rocking_friction(object(), FollowerFriction(0.1), 40.0, 0.01)
+        simulate_rocking_friction(object(), FollowerFriction(0.1), 40.0 / (2 * math.pi), 0.01)
 
 
 def _flat(**changes):
@@ -368,7 +371,8 @@ def test_the_example_runs_on_the_command_line(tmp_path):
     friction = friction_from_spec(spec)
     assert (friction.static, friction.kinetic) == (0.1, 0.08)
     assert friction.roller_inertia == pytest.approx(4e-7, rel=1e-15)
-    ds = simulate_rocking_friction(follower, friction, spec.profile.speed, 3 * 2 * math.pi / spec.profile.speed,
+    ds = simulate_rocking_friction(follower, friction, spec.profile.speed / (2 * math.pi),
+                                   3 * 2 * math.pi / spec.profile.speed,
                                    sample_rate=20e3, phase=spec.profile.phase)   # the command's default rate
     kinds = ds["event_kind"].values
     assert summary["separations"] == np.count_nonzero(kinds == "separation") > 0
@@ -389,6 +393,6 @@ def test_a_run_that_ends_on_a_dwell_completes():
     follower, _ = load_rocking(EXAMPLE, {})
     speed = 500.0 * 2.0 * math.pi / 60.0
     for duration in (0.36, 0.3599):
-        ds = simulate_rocking(follower, speed, duration, sample_rate=20e3)
+        ds = simulate_rocking(follower, speed / (2 * math.pi), duration, sample_rate=20e3)
         assert np.isfinite(ds["psi"].values).all()
         assert ds["time"].values[-1] == pytest.approx(duration, abs=1e-12)

@@ -262,7 +262,7 @@ def test_a_run_with_impacts_matches_an_independent_event_driven_solution():
     follower = RockingFollower(geometry, INERTIA, STIFFNESS, PRELOAD, restitution=0.5, capture_velocity=1e-4)
     w = 1.15 * rocking_liftoff_speed(follower)
     duration = 3 * 2 * math.pi / w
-    ds = simulate_rocking(follower, w, duration, sample_rate=4000, rtol=1e-12, atol=1e-14)
+    ds = simulate_rocking(follower, w / (2 * math.pi), duration, sample_rate=4000, rtol=1e-12, atol=1e-14)
     rest = ds.attrs["rest_angle_rad"]
     events, pieces = reference(w, duration, rest, 0.5, capture=1e-4)
     events = [(t, k) for t, k in events if k != "graze"]
@@ -292,7 +292,8 @@ def test_a_long_arm_tends_to_the_translating_roller_follower():
     theta = np.linspace(0.0, 2 * math.pi, 90, endpoint=False)
     lift = profile.lift(theta)[0]
     mass, stiffness, preload, w = 0.1, 200.0, 5.0, 40.0
-    translating = simulate_translating(TranslatingFollower(profile, mass, stiffness, preload), w, 2 * math.pi / w,
+    translating = simulate_translating(TranslatingFollower(profile, mass, stiffness, preload), w / (2 * math.pi),
+                                       2 * math.pi / w,
                                        sample_rate=2000)
     normal = translating.contact_force.values / np.cos(pressure_angle(profile, w * translating.time.values))
     kinematic, moment, force = [], [], []
@@ -303,7 +304,7 @@ def test_a_long_arm_tends_to_the_translating_roller_follower():
         rise = arm * (np.sin(psi) - math.sin(table.rest_angle))
         kinematic.append(np.abs(rise - lift).max())
         rocking = RockingFollower(geometry, mass * arm ** 2, stiffness * arm ** 2, preload * arm, samples=4096)
-        ds = simulate_rocking(rocking, w, 2 * math.pi / w, sample_rate=2000)
+        ds = simulate_rocking(rocking, w / (2 * math.pi), 2 * math.pi / w, sample_rate=2000)
         assert ds.in_contact.values.all() and translating.in_contact.values.all()
         moment.append(np.abs(ds.contact_moment.values / arm - translating.contact_force.values).max())
         force.append(np.abs(ds.contact_force.values - normal).max())
@@ -361,11 +362,11 @@ def test_bad_followers_and_runs_are_refused(change, match):
 def test_bad_runs_are_refused():
     follower = RockingFollower(circle_geometry(), INERTIA, STIFFNESS, PRELOAD, samples=1024)
     with pytest.raises(ParameterError, match="initial_state"):
-        simulate_rocking(follower, 10.0, 0.1, initial_state=(0.1,))
+        simulate_rocking(follower, 10.0 / (2 * math.pi), 0.1, initial_state=(0.1,))
     with pytest.raises(ParameterError, match="speed"):
-        simulate_rocking(follower, -1.0, 0.1)
+        simulate_rocking(follower, -1.0 / (2 * math.pi), 0.1)
     with pytest.raises(ParameterError, match="RockingFollower"):
-        simulate_rocking(circle_geometry(), 10.0, 0.1)
+        simulate_rocking(circle_geometry(), 10.0 / (2 * math.pi), 0.1)
     built = rocking_table.cache_info().misses
     for kwargs in ({"speed": math.nan, "duration": 0.1}, {"speed": 10.0, "duration": -1.0},
                    {"speed": 10.0, "duration": 0.1, "initial_state": (0.1, 0.0, 0.0)}):

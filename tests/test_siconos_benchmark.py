@@ -43,7 +43,8 @@ def separates(rpm):
     """Does camdyn's follower, started on the cam at the end of the base dwell, leave it
     within a quarter revolution (past the nose arc)?"""
     period = 2.0 * math.pi / omega(rpm)
-    ds = simulate_translating(alzate_rig(), omega(rpm), 0.25 * period, sample_rate=64 / period, phase=PHASE)
+    ds = simulate_translating(alzate_rig(), omega(rpm) / (2 * math.pi), 0.25 * period, sample_rate=64 / period,
+                              phase=PHASE)
     return bool((ds.event_kind.values == "separation").any())
 
 
@@ -62,7 +63,7 @@ def long_run(rpm, transient, revolutions, rtol=1e-10):
     revolution after the transient, and the impacts after it faster than the JSON's
     velocity floor: (revolution, cam angle [rad] after the section, approach velocity)."""
     period = 2.0 * math.pi / omega(rpm)
-    ds = simulate_translating(alzate_rig(), omega(rpm), (transient + revolutions) * period,
+    ds = simulate_translating(alzate_rig(), omega(rpm) / (2 * math.pi), (transient + revolutions) * period,
                               sample_rate=8 / period, phase=PHASE, rtol=rtol, atol=rtol / 100)
     gap, rate = ds.gap.values[::8], (ds.x_dot.values - ds.lift_rate.values)[::8]
     section = np.c_[gap, rate][transient:]
@@ -125,7 +126,7 @@ def test_the_first_impacts_from_rest_agree_within_the_time_steppings_scatter(rpm
     w = omega(rpm)
     window = revolutions * (2.0 * math.pi / w)
     rtol = 1e-12 if rpm < 700 else 1e-11   # at 700 rpm rtol 1e-12 shrinks the step below time's resolution
-    ds = simulate_translating(alzate_rig(), w, window, sample_rate=64 / window, phase=PHASE, rtol=rtol,
+    ds = simulate_translating(alzate_rig(), w / (2 * math.pi), window, sample_rate=64 / window, phase=PHASE, rtol=rtol,
                               atol=rtol / 100)
     real = ds.event_kind.values != "graze"
     events, _ = reference(w, window)
@@ -149,7 +150,7 @@ def _separation(rpm, start, revolutions, kick=1e-9):
     runs from ``start`` and from ``start`` with the velocity raised by ``kick`` [m/s],
     once per revolution."""
     period = 2.0 * math.pi / omega(rpm)
-    runs = [simulate_translating(alzate_rig(), omega(rpm), revolutions * period, sample_rate=4 / period,
+    runs = [simulate_translating(alzate_rig(), omega(rpm) / (2 * math.pi), revolutions * period, sample_rate=4 / period,
                                  phase=PHASE, initial_state=(start[0], start[1] + dv), rtol=1e-11, atol=1e-13)
             for dv in (0.0, kick)]
     gap = [run.gap.values[::4] for run in runs]

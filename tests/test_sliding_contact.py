@@ -34,8 +34,9 @@ def test_without_friction_the_translating_follower_is_reproduced_bitwise(face):
         follower = TranslatingFollower(profile, mass=0.5, stiffness=2000.0, preload=20.0, restitution=0.6)
         speed, phase = 140.0, 0.0
     duration = 3 * 2.0 * math.pi / speed
-    plain = simulate_translating(follower, speed, duration, sample_rate=4000.0, phase=phase)
-    rough = simulate_sliding(follower, FollowerFriction(0.0), speed, duration, sample_rate=4000.0, phase=phase)
+    plain = simulate_translating(follower, speed / (2 * math.pi), duration, sample_rate=4000.0, phase=phase)
+    rough = simulate_sliding(follower, FollowerFriction(0.0), speed / (2 * math.pi), duration, sample_rate=4000.0,
+                             phase=phase)
     assert plain.attrs["solver_events"] > 3   # impacts and separations happen
     np.testing.assert_array_equal(rough["x"].values, plain["x"].values)
     np.testing.assert_array_equal(rough["x_dot"].values, plain["x_dot"].values)
@@ -55,7 +56,7 @@ def test_roller_spin_up_on_a_dwell_ends_at_the_closed_form_time():
     r_base, r_r, inertia, mu, preload, omega = 0.05, 0.01, 2e-6, 0.2, 50.0, 100.0
     profile = eccentric_circle(r_base, 0.0, follower="roller", roller_radius=r_r)
     follower = TranslatingFollower(profile, mass=0.5, stiffness=1000.0, preload=preload)
-    ds = simulate_sliding(follower, FollowerFriction(0.3, mu, roller_inertia=inertia), omega, 0.02,
+    ds = simulate_sliding(follower, FollowerFriction(0.3, mu, roller_inertia=inertia), omega / (2 * math.pi), 0.02,
                           sample_rate=5000.0, initial_state=(0.0, 0.0, 0.0))
     t_stop = inertia * omega * r_base / (mu * preload * r_r ** 2)
     kinds = list(ds["event_kind"].values)
@@ -86,7 +87,8 @@ def test_knife_edge_normal_force_against_the_classical_relation():
     written here from the lift; the cam turning counter-clockwise drags the tip back on
     the rise."""
     follower, omega, mu, eps = _offset_knife(), 40.0, 0.15, 0.004
-    ds = simulate_sliding(follower, FollowerFriction(mu), omega, 2 * math.pi / omega, sample_rate=2000.0)
+    ds = simulate_sliding(follower, FollowerFriction(mu), omega / (2 * math.pi), 2 * math.pi / omega,
+                          sample_rate=2000.0)
     assert ds["in_contact"].values.all()
     theta = omega * ds["time"].values
     s, s1, s2, _ = follower.profile.lift(theta)
@@ -104,8 +106,8 @@ def test_flat_face_friction_loads_only_the_guide():
     """A flat face: the friction is normal to its line, so the motion is the frictionless
     one; the face slides at omega (r_base + s)."""
     follower, omega = _offset_knife("flat", 0.0), 90.0   # 860 rpm, above lift-off
-    plain = simulate_translating(follower, omega, 0.2, sample_rate=2000.0)
-    rough = simulate_sliding(follower, FollowerFriction(0.3), omega, 0.2, sample_rate=2000.0)
+    plain = simulate_translating(follower, omega / (2 * math.pi), 0.2, sample_rate=2000.0)
+    rough = simulate_sliding(follower, FollowerFriction(0.3), omega / (2 * math.pi), 0.2, sample_rate=2000.0)
     np.testing.assert_array_equal(rough["x"].values, plain["x"].values)
     touching = rough["in_contact"].values == 1
     np.testing.assert_allclose(rough["slip_velocity"].values[touching],
@@ -267,7 +269,7 @@ def test_roller_lift_off_skid_and_roll_against_an_independent_solution():
     profile = eccentric_circle(R, e, follower="roller", roller_radius=r)
     follower = TranslatingFollower(profile, mass=m, stiffness=k, preload=f0, capture_velocity=100.0)
     period = 2 * math.pi / omega
-    ds = simulate_sliding(follower, FollowerFriction(mu_s, mu_k, J), omega, period, sample_rate=20000.0,
+    ds = simulate_sliding(follower, FollowerFriction(mu_s, mu_k, J), omega / (2 * math.pi), period, sample_rate=20000.0,
                           phase=math.pi, rtol=1e-12, atol=1e-14)
     cam = EccentricRoller(R, e, r, m, k, f0, J, mu_s, mu_k, omega, math.pi)
     events, pieces = _oracle(cam, period, float(ds["roller_speed"][0]))
@@ -282,7 +284,8 @@ def test_roller_lift_off_skid_and_roll_against_an_independent_solution():
     # the cam can neither pull (N >= 0, |F| <= mu N and cos phi > mu |sin phi| give F_line
     # >= 0) nor change the motion of a follower it holds: the lift motion is the
     # frictionless one (measured 1e-17 m), the friction only sets N, F and the spin
-    plain = simulate_translating(follower, omega, period, sample_rate=20000.0, phase=math.pi, rtol=1e-12,
+    plain = simulate_translating(follower, omega / (2 * math.pi), period, sample_rate=20000.0, phase=math.pi,
+                                 rtol=1e-12,
                                  atol=1e-14)
     assert float(np.abs(ds["x"].values - plain["x"].values).max()) < 1e-12
     np.testing.assert_allclose(ds["event_time"].values[1:3], plain["event_time"].values, rtol=0, atol=1e-12)
@@ -298,13 +301,13 @@ def test_refusals_name_the_parameter():
     with pytest.raises(ParameterError, match="must not exceed friction.static"):
         FollowerFriction(0.1, 0.2)
     with pytest.raises(ParameterError, match="friction.roller_inertia: a knife follower has no roller"):
-        simulate_sliding(knife, FollowerFriction(0.1, roller_inertia=1e-6), 40.0, 0.01)
+        simulate_sliding(knife, FollowerFriction(0.1, roller_inertia=1e-6), 40.0 / (2 * math.pi), 0.01)
     compliant = TranslatingFollower(knife.profile, mass=0.5, stiffness=2000.0, preload=20.0, contact="compliant",
                                     contact_stiffness=1e7)
     with pytest.raises(ParameterError, match="needs the rigid contact law"):
-        simulate_sliding(compliant, FollowerFriction(0.1), 40.0, 0.01)
+        simulate_sliding(compliant, FollowerFriction(0.1), 40.0 / (2 * math.pi), 0.01)
     with pytest.raises(ParameterError, match="jams"):   # pressure angles up to about 20 deg, mu tan(phi) > 1
-        simulate_sliding(knife, FollowerFriction(3.5), 40.0, 0.01)
+        simulate_sliding(knife, FollowerFriction(3.5), 40.0 / (2 * math.pi), 0.01)
 
 
 @pytest.mark.parametrize("key, value, face, law, message", [
@@ -361,7 +364,7 @@ def test_the_example_runs_on_the_command_line(tmp_path):
     assert status == 0, err
     summary = json.loads(out)["summary"]
     follower, spec = load_translating(example, {})
-    ds = simulate_sliding(follower, friction_from_spec(spec), spec.speed, 3 * 2 * math.pi / spec.speed,
+    ds = simulate_sliding(follower, friction_from_spec(spec), spec.speed / (2 * math.pi), 3 * 2 * math.pi / spec.speed,
                           sample_rate=20e3, phase=spec.phase)   # the command's default rate, 20 kHz
     kinds = ds["event_kind"].values
     assert summary["separations"] == np.count_nonzero(kinds == "separation") == 3

@@ -139,7 +139,8 @@ def test_the_rig_matches_an_independent_event_driven_solution(rpm, duration, lea
     resolution of time, so it runs at rtol 1e-12."""
     w = rpm * 2 * math.pi / 60
     rtol = 1e-13 if rpm == 358 else 1e-12
-    ds = simulate_translating(alzate_rig(), w, duration, sample_rate=2000, phase=PHASE, rtol=rtol, atol=rtol / 100)
+    ds = simulate_translating(alzate_rig(), w / (2 * math.pi), duration, sample_rate=2000, phase=PHASE, rtol=rtol,
+                              atol=rtol / 100)
     events, pieces = reference(w, duration)
     events = [(t, k) for t, k in events if k != "graze"]
     kinds = [k for _, k in events]
@@ -174,9 +175,11 @@ def test_the_rig_leaves_the_cam_at_its_closed_form_liftoff_speed():
     rig = alzate_rig()
     assert liftoff_speed(rig) == pytest.approx(w_lift, rel=1e-6)
     revolution = 2 * math.pi / w_lift
-    below = simulate_translating(rig, 0.995 * w_lift, 3 * revolution, sample_rate=500 / revolution, phase=PHASE)
+    below = simulate_translating(rig, (0.995 * w_lift) / (2 * math.pi), 3 * revolution, sample_rate=500 / revolution,
+                                 phase=PHASE)
     assert below.event_time.size == 0 and below.in_contact.values.all()
-    above = simulate_translating(rig, 1.005 * w_lift, 1.2 * revolution, sample_rate=500 / revolution, phase=PHASE)
+    above = simulate_translating(rig, (1.005 * w_lift) / (2 * math.pi), 1.2 * revolution,
+                                 sample_rate=500 / revolution, phase=PHASE)
     assert above.event_kind.values[0] == "separation"
     angle = (PHASE + 1.005 * w_lift * above.event_time.values[0]) % (2 * math.pi)
     # it leaves the cam at the start of the nose arc, where the closed form has its minimum
@@ -185,7 +188,7 @@ def test_the_rig_leaves_the_cam_at_its_closed_form_liftoff_speed():
 
 def _compliant_times(stiffness, w, t_end):
     rig = alzate_rig("compliant", stiffness, model.penalty_damping(RESTITUTION, stiffness, MASS))
-    ds = simulate_translating(rig, w, t_end, sample_rate=2000, phase=PHASE, rtol=1e-11, atol=1e-13)
+    ds = simulate_translating(rig, w / (2 * math.pi), t_end, sample_rate=2000, phase=PHASE, rtol=1e-11, atol=1e-13)
     return ds.event_time.values[ds.event_kind.values == "contact onset"]
 
 
@@ -196,7 +199,8 @@ def test_the_compliant_contact_converges_to_the_rigid_impacts():
     factor 10 over two decades of kc. (The compliant run starts with a contact onset at
     t = 0, the follower resting on the rising cam.)"""
     w, t_end = 358 * 2 * math.pi / 60, 0.2
-    rigid = simulate_translating(alzate_rig(), w, t_end, sample_rate=2000, phase=PHASE, rtol=1e-11, atol=1e-13)
+    rigid = simulate_translating(alzate_rig(), w / (2 * math.pi), t_end, sample_rate=2000, phase=PHASE, rtol=1e-11,
+                                 atol=1e-13)
     impacts = rigid.event_time.values[rigid.event_kind.values == "impact"][:3]
     errors = []
     for stiffness in (1e6, 1e7, 1e8):
@@ -267,7 +271,9 @@ def test_with_damping_the_liftoff_speed_brackets_the_first_separation():
     w_lift = liftoff_speed(rig)
     assert w_lift < liftoff_speed(alzate_rig())   # the damper pulls back on the rise's end
     revolution = 2 * math.pi / w_lift
-    below = simulate_translating(rig, 0.995 * w_lift, 3 * revolution, sample_rate=500 / revolution, phase=PHASE)
+    below = simulate_translating(rig, (0.995 * w_lift) / (2 * math.pi), 3 * revolution, sample_rate=500 / revolution,
+                                 phase=PHASE)
     assert below.event_time.size == 0 and below.in_contact.values.all()
-    above = simulate_translating(rig, 1.005 * w_lift, 1.2 * revolution, sample_rate=500 / revolution, phase=PHASE)
+    above = simulate_translating(rig, (1.005 * w_lift) / (2 * math.pi), 1.2 * revolution,
+                                 sample_rate=500 / revolution, phase=PHASE)
     assert above.event_kind.values[0] == "separation"

@@ -131,7 +131,8 @@ def test_agrees_with_an_independent_scipy_solution(face):
         follower = dataclasses.replace(knife_follower(), profile=rise_return_profile(
             [("cycloidal", SPAN, RISE), ("dwell", math.pi - SPAN, 0.0), ("cycloidal", SPAN, -RISE),
              ("dwell", math.pi - SPAN, 0.0)], BASE, follower="flat"), hertz=law)
-    ds = simulate_translating(follower, speed, duration, sample_rate=5000.0, initial_state=y0, rtol=1e-12,
+    ds = simulate_translating(follower, speed / (2 * math.pi), duration, sample_rate=5000.0, initial_state=y0,
+                              rtol=1e-12,
                               atol=1e-15)
     onsets = ds.event_time.values
     assert np.count_nonzero(ds.event_kind.values == "contact onset") >= 6   # a run with impacts
@@ -144,7 +145,8 @@ def test_agrees_with_an_independent_scipy_solution(face):
 
 def bounce_energy(follower, line_stiffness=None, point_stiffness=None):
     """Largest change [J] of the energy of undamped bounces on the dwell, and its scale."""
-    ds = simulate_translating(follower, 0.5, 1.0, sample_rate=20000.0, phase=2.0, initial_state=(0.002, 0.0),
+    ds = simulate_translating(follower, 0.5 / (2 * math.pi), 1.0, sample_rate=20000.0, phase=2.0,
+                              initial_state=(0.002, 0.0),
                               rtol=1e-12, atol=1e-15)
     assert np.all(ds.lift.values == 0.0)   # on the dwell throughout: the cam does no work
     x, v = ds.x.values, ds.x_dot.values
@@ -199,7 +201,7 @@ def test_rigid_limit_converges_to_newton_restitution():
     chi = brentq(lambda c: hunt_crossley_restitution(c) - 0.8, 0.05, 1.0, xtol=1e-13)
     tuned = 1.0 - chi / 1.5       # the law's input e for that chi (chi = 3 (1 - e) / 2)
     rig, speed, y0 = alzate_rig(), 358 * 2 * math.pi / 60, (0.005, 0.0)
-    rigid = simulate_translating(rig, speed, 0.05, initial_state=y0)
+    rigid = simulate_translating(rig, speed / (2 * math.pi), 0.05, initial_state=y0)
     impacts = rigid.event_kind.values == "impact"
     times, approach = rigid.event_time.values[impacts][:3], rigid.event_velocity.values[impacts][:3]
     assert times.size == 3
@@ -207,7 +209,7 @@ def test_rigid_limit_converges_to_newton_restitution():
     for scale in (1.0, 10.0, 100.0, 1000.0):
         law = HertzContact(cam_modulus=2.1e8 * scale, follower_modulus=2.1e8 * scale, tip_radius=5e-3,
                            damping_law="hunt-crossley", restitution=tuned)
-        ds = simulate_translating(dataclasses.replace(rig, contact="hertz", hertz=law), speed, 0.05,
+        ds = simulate_translating(dataclasses.replace(rig, contact="hertz", hertz=law), speed / (2 * math.pi), 0.05,
                                   initial_state=y0)
         kinds = ds.event_kind.values
         onsets = kinds == "contact onset"

@@ -86,10 +86,11 @@ def simulate_rocking_command(source: str, assignments, speed: str | None, revolu
     omega, duration, fs = run_span(spec.name, spec.profile.speed, speed, revolutions, sample_rate)
     friction = friction_from_spec(spec)
     tolerance = DEFAULT_RTOL if rtol is None else rtol
+    cam = f"{omega!r} rad/s"   # the entries read Hz or text with units; this keeps omega exactly
     if friction is None:
-        ds = simulate_rocking(follower, omega, duration, sample_rate=fs, phase=spec.profile.phase, rtol=tolerance)
+        ds = simulate_rocking(follower, cam, duration, sample_rate=fs, phase=spec.profile.phase, rtol=tolerance)
     else:
-        ds = simulate_rocking_friction(follower, friction, omega, duration, sample_rate=fs,
+        ds = simulate_rocking_friction(follower, friction, cam, duration, sample_rate=fs,
                                        phase=spec.profile.phase, rtol=tolerance)
     ds.attrs["name"] = spec.name
     summary = rocking_summary(ds, follower, spec.name)

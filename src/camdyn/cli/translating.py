@@ -132,10 +132,11 @@ def simulate_translating_command(source: str, assignments, speed: str | None, re
     omega, duration, fs = run_span(spec.name, spec.speed, speed, revolutions, sample_rate)
     friction = friction_from_spec(spec)
     tolerance = DEFAULT_RTOL if rtol is None else rtol
+    cam = f"{omega!r} rad/s"   # the entries read Hz or text with units; this keeps omega exactly
     if friction is None:
-        ds = simulate_translating(follower, omega, duration, sample_rate=fs, phase=spec.phase, rtol=tolerance)
+        ds = simulate_translating(follower, cam, duration, sample_rate=fs, phase=spec.phase, rtol=tolerance)
     else:
-        ds = simulate_sliding(follower, friction, omega, duration, sample_rate=fs, phase=spec.phase, rtol=tolerance)
+        ds = simulate_sliding(follower, friction, cam, duration, sample_rate=fs, phase=spec.phase, rtol=tolerance)
     ds.attrs["name"] = spec.name
     summary = translating_summary(ds, follower)
     if friction is not None:

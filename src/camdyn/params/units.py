@@ -10,14 +10,15 @@ per second, rpm means revolutions per minute, rad/s means radians per second.
 from __future__ import annotations
 
 import math
+import numbers
 import re
 from functools import lru_cache
 
 import pint
 
-from camdyn.errors import UnitError
+from camdyn.errors import ParameterError, UnitError
 
-__all__ = ["registry", "parse_quantity", "parse_speed", "format_quantity"]
+__all__ = ["registry", "parse_quantity", "parse_speed", "angular_speed", "format_quantity"]
 
 
 @lru_cache(maxsize=1)
@@ -121,6 +122,28 @@ def parse_speed(text, key: str = "speed") -> float:
     if q.dimensionality == reg.Unit("Hz").dimensionality:
         return float(q.to("Hz").magnitude)
     raise UnitError(f"{key}: {text!r} is not a rotational speed; use Hz, rpm or rad/s")
+
+
+def angular_speed(speed, key: str = "speed") -> float:
+    """Read a cam speed given at a public entry and return omega [rad/s].
+
+    ``speed`` is a number of Hz (revolutions per second) or text with units read by
+    :func:`parse_speed` (``"358 rpm"``, ``"37.5 rad/s"``, ``"6 Hz"``). Text in rad/s
+    keeps its number exactly. A speed that is not positive and finite raises
+    :class:`~camdyn.errors.ParameterError`.
+    """
+    if isinstance(speed, bool) or not isinstance(speed, (numbers.Real, str)):
+        raise ParameterError(f"{key} must be a number of Hz or text such as '358 rpm', got {speed!r}")
+    omega = None
+    if isinstance(speed, str):
+        q = _quantity(speed, key)
+        if not q.unitless and "radian" in str(q.units):
+            omega = float(q.to(registry().radian / registry().second).magnitude)
+    if omega is None:
+        omega = 2.0 * math.pi * parse_speed(speed, key)
+    if not (math.isfinite(omega) and omega > 0.0):
+        raise ParameterError(f"{key} must be positive and finite, got {speed!r} (a number is read as Hz)")
+    return omega
 
 
 def format_quantity(value: float, unit: str) -> str:

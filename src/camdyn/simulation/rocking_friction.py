@@ -58,6 +58,7 @@ from camdyn.errors import GeometryError, ParameterError
 from camdyn.integrator import driver
 from camdyn.model import sliding_follower as model
 from camdyn.model import translating_follower as base
+from camdyn.params.units import angular_speed
 from camdyn.simulation import limits
 from camdyn.simulation.rocking_roller import RockingFollower, rocking_table, spline_table
 from camdyn.simulation.sliding import FollowerFriction, friction_dataset
@@ -167,8 +168,10 @@ def simulate_rocking_friction(follower, friction, speed, duration, sample_rate=1
         The arm and its cam, with the rigid contact law.
     friction : FollowerFriction
         The coefficients mu_s, mu_k [-] and the roller's spin inertia J_r [kg m^2].
-    speed : float
-        Cam speed omega [rad/s], counter-clockwise.
+    speed : float or str
+        Cam speed [Hz] (revolutions per second), or text with units such as ``"358 rpm"``,
+        ``"37.5 rad/s"`` or ``"6 Hz"`` (:func:`camdyn.params.units.parse_speed`); positive
+        (counter-clockwise). Compiled code runs on omega [rad/s].
     duration : float
         Length of the run [s].
     sample_rate : float
@@ -199,6 +202,7 @@ def simulate_rocking_friction(follower, friction, speed, duration, sample_rate=1
         ``event_velocity`` [rad/s].
     """
     check_arm_friction(follower, friction)
+    speed = angular_speed(speed)   # omega [rad/s]
     check_run_arguments(speed, duration, sample_rate, rtol, atol)
     if not math.isfinite(limits.check_number("phase", phase, "rad")):
         raise ParameterError(f"phase must be finite, got {phase!r} rad")

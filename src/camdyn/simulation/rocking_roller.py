@@ -79,6 +79,7 @@ from camdyn.model import lift_laws
 from camdyn.model.profiles import ROW, TWO_PI, Profile
 from camdyn.model.rocking_roller import RockingGeometry, contact_configuration, surface_curvature
 from camdyn.params.rocking import RockingSpec
+from camdyn.params.units import angular_speed
 from camdyn.simulation import limits
 from camdyn.simulation.translating import TranslatingFollower, follower_from_spec, simulate_translating
 from camdyn.simulation.translating_contact import HertzContact
@@ -354,8 +355,10 @@ def simulate_rocking(follower, speed, duration, sample_rate=10e3, phase=0.0, ini
     ----------
     follower : RockingFollower
         The arm and its cam.
-    speed : float
-        Cam speed omega [rad/s], counter-clockwise.
+    speed : float or str
+        Cam speed [Hz] (revolutions per second), or text with units such as ``"358 rpm"``,
+        ``"37.5 rad/s"`` or ``"6 Hz"`` (:func:`camdyn.params.units.parse_speed`); positive
+        (counter-clockwise). Compiled code runs on omega [rad/s].
     duration : float
         Length of the run [s].
     sample_rate : float
@@ -385,6 +388,7 @@ def simulate_rocking(follower, speed, duration, sample_rate=10e3, phase=0.0, ini
     """
     if not isinstance(follower, RockingFollower):
         raise ParameterError(f"expected a RockingFollower, got {type(follower).__name__}")
+    speed = angular_speed(speed)   # omega [rad/s] from Hz or text with units
     for name, value, unit in (("speed", speed, "rad/s"), ("duration", duration, "s"),
                               ("sample_rate", sample_rate, "Hz")):   # before the table is built
         if not (math.isfinite(limits.check_number(name, value, unit)) and value > 0.0):
@@ -407,7 +411,7 @@ def simulate_rocking(follower, speed, duration, sample_rate=10e3, phase=0.0, ini
             raise ParameterError(f"initial_state must be two finite numbers (psi [rad], psi_dot [rad/s]), "
                                  f"got {initial_state!r}")
         state = (sigma * (y0[0] - table.rest_angle), sigma * y0[1])
-    ds = simulate_translating(translating, speed, duration, sample_rate=sample_rate, phase=phase,
+    ds = simulate_translating(translating, f"{speed!r} rad/s", duration, sample_rate=sample_rate, phase=phase,
                               initial_state=state, rtol=rtol, atol=atol, max_step=max_step, max_events=max_events,
                               max_steps=max_steps)
     return _dataset(follower, table, ds, speed, phase)

@@ -20,6 +20,7 @@ from camdyn.integrator import driver
 from camdyn.model import sliding_follower as model
 from camdyn.model import translating_follower as base
 from camdyn.model.profiles import pressure_angle
+from camdyn.params.units import angular_speed
 from camdyn.simulation import limits
 from camdyn.simulation.translating import TranslatingFollower, check_run_arguments, leaves_at_joint, run_follower
 from camdyn.systems import registry as systems
@@ -125,8 +126,10 @@ def simulate_sliding(follower, friction, speed, duration, sample_rate=10e3, phas
         The follower and its cam (rigid contact law where the friction is not zero).
     friction : FollowerFriction
         The friction coefficients and the roller's inertia.
-    speed : float
-        Cam speed omega [rad/s], positive (counter-clockwise).
+    speed : float or str
+        Cam speed [Hz] (revolutions per second), or text with units such as ``"358 rpm"``,
+        ``"37.5 rad/s"`` or ``"6 Hz"`` (:func:`camdyn.params.units.parse_speed`); positive
+        (counter-clockwise). Compiled code runs on omega [rad/s].
     duration : float
         Length of the run [s].
     sample_rate : float
@@ -155,6 +158,7 @@ def simulate_sliding(follower, friction, speed, duration, sample_rate=10e3, phas
     if not isinstance(friction, FollowerFriction):
         raise ParameterError(f"expected a FollowerFriction, got {type(friction).__name__}")
     friction.check(follower)
+    speed = angular_speed(speed)   # omega [rad/s] from Hz or text with units
     check_run_arguments(speed, duration, sample_rate, rtol, atol)
     if not math.isfinite(limits.check_number("phase", phase, "rad")):
         raise ParameterError(f"phase must be finite, got {phase!r} rad")

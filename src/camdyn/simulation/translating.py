@@ -29,6 +29,7 @@ from camdyn.model.profiles import (
     tabulated_profile,
 )
 from camdyn.params.profiles import TranslatingSpec
+from camdyn.params.units import angular_speed
 from camdyn.simulation import limits
 from camdyn.simulation.translating_contact import HertzContact
 from camdyn.systems import registry as systems
@@ -292,8 +293,10 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
     ----------
     follower : TranslatingFollower
         The follower and its cam.
-    speed : float
-        Cam speed omega [rad/s] (``rpm * 2 pi / 60``).
+    speed : float or str
+        Cam speed [Hz] (revolutions per second), or text with units such as ``"358 rpm"``,
+        ``"37.5 rad/s"`` or ``"6 Hz"`` (:func:`camdyn.params.units.parse_speed`); positive
+        (counter-clockwise). Compiled code runs on omega [rad/s].
     duration : float
         Length of the run [s].
     sample_rate : float
@@ -325,6 +328,7 @@ def simulate_translating(follower, speed, duration, sample_rate=10e3, phase=0.0,
     """
     if not isinstance(follower, TranslatingFollower):
         raise ParameterError(f"expected a TranslatingFollower, got {type(follower).__name__}")
+    speed = angular_speed(speed)   # omega [rad/s] from Hz or text with units
     check_run_arguments(speed, duration, sample_rate, rtol, atol)
     if not math.isfinite(limits.check_number("phase", phase, "rad")):
         raise ParameterError(f"phase must be finite, got {phase!r} rad")
