@@ -158,8 +158,18 @@ def _spectrum_runs(source: str, assignments, speed, revolutions: float, sample_r
     from camdyn.analysis.spectra import follower_series
     from camdyn.cli.common import parse_hertz
     from camdyn.params.mechanism import is_mechanism
+    from camdyn.systems.model_files import is_model_reference
 
     rate = parse_hertz(sample_rate)
+    if is_model_reference(source):   # a model of the model protocol: its own run, any of its channels
+        from camdyn.params.config import parse_assignments
+        from camdyn.simulation.models import simulate_model
+        from camdyn.systems.model_files import load_model
+
+        if follower not in (None, 1):
+            raise ParameterError(f"--follower: a model of your own is one run, got {follower}")
+        bound = load_model(source).bind(parse_assignments(assignments))
+        return [(None, simulate_model(bound, speed=speed, revolutions=revolutions, sample_rate=rate))]
     if not is_mechanism(source):
         if follower not in (None, 1):
             raise ParameterError(f"--follower: a cam-follower has one follower, got {follower}")
