@@ -76,7 +76,7 @@ def branches(rig):
     its range, why it ended and its bifurcations."""
     found, lines, problem = [], [], None
     for periods, start, stop in BRANCHES:
-        problem, branch = trace_translating(rig, start * RPM, stop * RPM, periods, max_points=400,
+        problem, branch = trace_translating(rig, f"{start} rpm", f"{stop} rpm", periods, max_points=400,
                                             transient=TRANSIENTS[periods])
         found.append(branch)
         for item in branch.bifurcations:

@@ -34,7 +34,7 @@ def rig():
 
 @pytest.fixture(scope="module")
 def orbit700(rig):
-    return find_orbit(translating_problem(rig, 700.0 * RPM), transient=100)
+    return find_orbit(translating_problem(rig, (700.0 * RPM) / (2 * math.pi)), transient=100)
 
 
 def _sections(rig, rpm, revolutions, per_revolution=8, initial_state=None):
@@ -90,7 +90,7 @@ def test_the_monodromy_matches_differences_of_perturbed_simulations(rig, orbit70
     law (impact resets) and for the compliant one (a penalty switched on and off)."""
     if law == "compliant":
         rig = _compliant_rig()
-        orbit700 = find_orbit(translating_problem(rig, 700.0 * RPM), transient=100)
+        orbit700 = find_orbit(translating_problem(rig, (700.0 * RPM) / (2 * math.pi)), transient=100)
         assert orbit700.impacts_per_period == 1 and orbit700.stable
     omega = 700.0 * RPM
     period = 2.0 * math.pi / omega
@@ -130,7 +130,7 @@ def test_an_orbit_captured_by_the_cam_has_zero_multipliers(rig):
     the simulator from two different starts (resting on the cam; 0.2 m above it, at
     rest) that both end in a capture lands on the orbit's state."""
     omega, phase = 170.0 * RPM, 2.9                                          # [rad/s], [rad]: in flight
-    orbit = find_orbit(translating_problem(rig, omega, phase=phase), transient=5)
+    orbit = find_orbit(translating_problem(rig, omega / (2 * math.pi), phase=phase), transient=5)
     assert np.array_equal(orbit.multipliers, np.zeros(2)) and orbit.impacts_per_period > 50
     period = 2.0 * math.pi / omega
     for start in (None, (0.2, 0.0)):
@@ -155,7 +155,8 @@ def test_a_located_period_doubling_lies_where_the_brute_force_regime_changes(rig
     at 741 rpm (they wander, as the diagram does from 740 rpm), so the doubling lies
     between them; a run started on the period-2 orbit switched onto there stays on it with
     period 2, as its multipliers say it must."""
-    problem, branch = trace_translating(rig, 700.0 * RPM, 745.0 * RPM, step=0.01, max_points=80)
+    problem, branch = trace_translating(rig, 700.0 * RPM / (2 * math.pi), 745.0 * RPM / (2 * math.pi), step=0.01,
+                                        max_points=80)
     doublings = [b for b in branch.bifurcations if b.kind == "period-doubling"]
     assert len(doublings) == 1
     assert np.min(np.abs(doublings[0].orbit.multipliers + 1.0)) < 1e-4
@@ -172,15 +173,15 @@ def test_a_located_period_doubling_lies_where_the_brute_force_regime_changes(rig
 
 def test_the_problem_refuses_bad_input(rig):
     with pytest.raises(ParameterError, match="speed"):
-        translating_problem(rig, -1.0)
+        translating_problem(rig, -1.0 / (2 * math.pi))
     with pytest.raises(ParameterError, match="initial_state"):
-        translating_problem(rig, 70.0, initial_state=(0.0, 1.0, 2.0))
+        translating_problem(rig, 70.0 / (2 * math.pi), initial_state=(0.0, 1.0, 2.0))
     with pytest.raises(ParameterError, match="TranslatingFollower"):
-        translating_problem("alzate", 70.0)
+        translating_problem("alzate", 70.0 / (2 * math.pi))
     with pytest.raises(ParameterError, match="different"):
-        trace_translating(rig, 70.0, 70.0)
+        trace_translating(rig, 70.0 / (2 * math.pi), 70.0 / (2 * math.pi))
     with pytest.raises(ParameterError, match="no orbit"):
-        translating_dataset(translating_problem(rig, 70.0), [])
+        translating_dataset(translating_problem(rig, 70.0 / (2 * math.pi)), [])
 
 
 def run(argv):

@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pytest
 
+from camdyn.continuation.translating import trace_translating, translating_problem
 from camdyn.errors import ParameterError
 from camdyn.model.profiles import eccentric_circle
 from camdyn.model.rocking_roller import RockingGeometry
@@ -72,3 +73,17 @@ def test_each_entry_reads_rpm_hz_and_rad_per_s_alike(name):
 def test_a_speed_that_is_not_positive_and_finite_is_refused(name, bad):
     with pytest.raises(ParameterError, match="speed"):
         ENTRIES[name](bad)
+
+
+def test_the_continuation_of_the_translating_follower_reads_the_same_vocabulary():
+    """The problem's parameter stays omega [rad/s]; its start may be spelled in any unit."""
+    omega = 2 * math.pi * (RPM / 60)   # [rad/s]
+    for speed in (f"{RPM} rpm", RPM / 60, f"{omega!r} rad/s"):
+        assert translating_problem(alzate_rig(), speed).value == omega
+    for bad in (0.0, -1.0, math.nan, "-600 rpm", "3 mm"):
+        with pytest.raises(ParameterError, match="speed"):
+            translating_problem(alzate_rig(), bad)
+        with pytest.raises(ParameterError, match="start"):
+            trace_translating(alzate_rig(), bad, RPM / 60)
+        with pytest.raises(ParameterError, match="stop"):
+            trace_translating(alzate_rig(), RPM / 60, bad)

@@ -53,7 +53,7 @@ def _revolution(follower, omega, state, rtols):
         try:
             with warnings.catch_warnings():   # only the end state is used: 64 samples are plenty
                 warnings.simplefilter("ignore", LargeResultWarning)
-                ds = simulate_translating(follower, f"{omega!r} rad/s", 2.0 * math.pi / omega,
+                ds = simulate_translating(follower, f"{float(omega)!r} rad/s", 2.0 * math.pi / omega,
                                           sample_rate=SAMPLES_PER_REVOLUTION * omega / (2.0 * math.pi),
                                           initial_state=state, rtol=rtol, max_steps=STEPS_PER_REVOLUTION)
         except SimulationError as exc:

@@ -86,7 +86,7 @@ def simulate_rocking_command(source: str, assignments, speed: str | None, revolu
     omega, duration, fs = run_span(spec.name, spec.profile.speed, speed, revolutions, sample_rate)
     friction = friction_from_spec(spec)
     tolerance = DEFAULT_RTOL if rtol is None else rtol
-    cam = f"{omega!r} rad/s"   # the entries read Hz or text with units; this keeps omega exactly
+    cam = f"{float(omega)!r} rad/s"   # the entries read Hz or text with units; this keeps omega exactly
     if friction is None:
         ds = simulate_rocking(follower, cam, duration, sample_rate=fs, phase=spec.profile.phase, rtol=tolerance)
     else:

@@ -132,7 +132,7 @@ def simulate_translating_command(source: str, assignments, speed: str | None, re
     omega, duration, fs = run_span(spec.name, spec.speed, speed, revolutions, sample_rate)
     friction = friction_from_spec(spec)
     tolerance = DEFAULT_RTOL if rtol is None else rtol
-    cam = f"{omega!r} rad/s"   # the entries read Hz or text with units; this keeps omega exactly
+    cam = f"{float(omega)!r} rad/s"   # the entries read Hz or text with units; this keeps omega exactly
     if friction is None:
         ds = simulate_translating(follower, cam, duration, sample_rate=fs, phase=spec.phase, rtol=tolerance)
     else:
@@ -208,8 +208,8 @@ def continue_translating_command(source: str, assignments, parameter: str, start
     if brute_force and plot is None:
         raise ParameterError("--brute-force draws the diagram under the branches of --plot: give --plot")
     follower, spec = load_translating(source, parse_assignments(assignments))
-    problem, branch = trace_translating(follower, first, last, period, step=step, max_points=max_points,
-                                        transient=transient)
+    problem, branch = trace_translating(follower, f"{float(first)!r} rad/s", f"{float(last)!r} rad/s", period,
+                                        step=step, max_points=max_points, transient=transient)
     branches = [branch, *switch_doublings(problem, branch, last, doublings, step, max_points)]
     ds = translating_dataset(problem, branches)
     ds.attrs["name"] = spec.name

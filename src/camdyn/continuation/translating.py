@@ -40,6 +40,7 @@ from camdyn.continuation.orbits import Orbit, find_orbit, shoot
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError
 from camdyn.model import translating_follower as model
+from camdyn.params.units import angular_speed
 from camdyn.simulation import limits
 from camdyn.simulation.translating import TranslatingFollower
 from camdyn.systems import registry as systems
@@ -61,8 +62,9 @@ def translating_problem(follower: TranslatingFollower, speed: float, phase: floa
     ----------
     follower : TranslatingFollower
         The follower and its cam (rigid or compliant contact).
-    speed : float
-        The starting cam speed omega [rad/s] (``rpm * 2 pi / 60``).
+    speed : float or str
+        The starting cam speed [Hz], or text with units (``"700 rpm"``, ``"73.3 rad/s"``);
+        the problem's parameter is omega [rad/s].
     phase : float
         Cam angle theta0 [rad] at the orbit's phase ``t = 0``: the Poincare section.
     initial_state : (float, float), optional
@@ -80,10 +82,8 @@ def translating_problem(follower: TranslatingFollower, speed: float, phase: floa
     if not isinstance(follower, TranslatingFollower):
         raise ParameterError(f"expected a TranslatingFollower, got {type(follower).__name__}")
     limits.check_tolerances(rtol, atol)
-    speed = limits.check_number("speed", speed, "rad/s")
+    speed = angular_speed(speed)   # omega [rad/s] from Hz or text with units
     phase = limits.check_number("phase", phase, "rad")
-    if not (math.isfinite(speed) and speed > 0.0):
-        raise ParameterError(f"the cam speed must be positive and finite, got {speed!r} rad/s")
     if not math.isfinite(phase):
         raise ParameterError(f"the phase must be finite, got {phase!r} rad")
 
@@ -108,8 +108,9 @@ def translating_problem(follower: TranslatingFollower, speed: float, phase: floa
 def trace_translating(follower: TranslatingFollower, start: float, stop: float, periods: int = 1, phase: float = 0.0,
                       step: float = 0.01, max_points: int = 200, transient: int = 100, rtol: float = 1e-10,
                       progress: Callable[[Orbit], None] | None = None) -> tuple[Problem, Branch]:
-    """The branch of period-``periods`` orbits from the cam speed ``start`` [rad/s]
-    towards ``stop`` [rad/s]: the orbit at ``start`` after ``transient`` revolutions from
+    """The branch of period-``periods`` orbits from the cam speed ``start`` towards
+    ``stop`` (each in Hz, or text with units such as ``"700 rpm"``; the branch's parameter
+    is omega [rad/s]): the orbit at ``start`` after ``transient`` revolutions from
     the follower resting on the cam (Newton's method on the shooting residual), then
     pseudo-arclength continuation (:func:`~camdyn.continuation.branches.continue_orbits`).
 
@@ -120,16 +121,14 @@ def trace_translating(follower: TranslatingFollower, start: float, stop: float, 
     SimulationError
         If no orbit is found at ``start``.
     """
-    for name, value in (("start", start), ("stop", stop)):
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0.0):
-            raise ParameterError(f"the {name} speed must be a positive number of rad/s, got {value!r}")
+    start, stop = angular_speed(start, "start"), angular_speed(stop, "stop")   # omega [rad/s]
     if start == stop:
         raise ParameterError("the range must be two different speeds")
     if int(periods) != periods or periods < 1:
         raise ParameterError(f"the period must be a positive whole number of revolutions, got {periods}")
     if transient < 1 or max_points < 2 or not step >= MIN_STEP:
         raise ParameterError(f"transient must be at least 1, max_points at least 2 and step at least {MIN_STEP:g}")
-    problem = translating_problem(follower, start, phase, rtol=rtol, atol=rtol * 1e-2)
+    problem = translating_problem(follower, f"{float(start)!r} rad/s", phase, rtol=rtol, atol=rtol * 1e-2)
     orbit = find_orbit(problem, periods=int(periods), transient=transient)
     branch = continue_orbits(problem, orbit, stop, step=step, max_step=max(step, 0.05), max_points=max_points,
                              progress=progress)

@@ -411,7 +411,7 @@ def simulate_rocking(follower, speed, duration, sample_rate=10e3, phase=0.0, ini
             raise ParameterError(f"initial_state must be two finite numbers (psi [rad], psi_dot [rad/s]), "
                                  f"got {initial_state!r}")
         state = (sigma * (y0[0] - table.rest_angle), sigma * y0[1])
-    ds = simulate_translating(translating, f"{speed!r} rad/s", duration, sample_rate=sample_rate, phase=phase,
+    ds = simulate_translating(translating, f"{float(speed)!r} rad/s", duration, sample_rate=sample_rate, phase=phase,
                               initial_state=state, rtol=rtol, atol=atol, max_step=max_step, max_events=max_events,
                               max_steps=max_steps)
     return _dataset(follower, table, ds, speed, phase)
