@@ -109,7 +109,7 @@ def main() -> None:
     rig, _ = load_translating("alzate")
     speeds = np.arange(LOWEST, HIGHEST + 0.5 * args.step, args.step)
     start = time.perf_counter()
-    section = poincare_section(rig, speeds, args.transient, args.revolutions, RTOL)
+    section = poincare_section(rig, speeds / 60.0, args.transient, args.revolutions, RTOL)
     seconds = time.perf_counter() - start
     liftoff = liftoff_speed(rig) * 60.0 / (2.0 * math.pi)
     marks = {f"lift-off {liftoff:.2f} rpm": liftoff, "358 rpm": 358.0, "660 rpm": 660.0}
@@ -120,7 +120,7 @@ def main() -> None:
     print("\n".join(lines))
     plot_poincare_diagram(section, args.out / "translating_bifurcation.png", marks, branches=continued)
     for name, low, high, step, transient, revolutions in WINDOWS:
-        near = poincare_section(rig, np.arange(low, high + 0.5 * step, step), transient, revolutions, RTOL)
+        near = poincare_section(rig, np.arange(low, high + 0.5 * step, step) / 60.0, transient, revolutions, RTOL)
         inside = (continued["speed_rpm"].values >= low - 5.0) & (continued["speed_rpm"].values <= high + 5.0)
         plot_poincare_diagram(near, args.out / name, None, branches=continued.isel(point=np.flatnonzero(inside)))
     if args.section is not None:

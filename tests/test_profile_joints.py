@@ -54,7 +54,7 @@ def test_a_continuous_rigid_run_completes_and_follows_the_restarted_map(rig, rpm
     period = 2.0 * math.pi / w
     ds = simulate_translating(rig, w / (2 * math.pi), REVOLUTIONS * period, sample_rate=16 / period)
     assert ds.attrs["status"] == "completed"
-    section = poincare_section(rig, [rpm], transient=0, revolutions=REVOLUTIONS)
+    section = poincare_section(rig, [rpm / 60], transient=0, revolutions=REVOLUTIONS)   # [Hz]
     assert np.all(section.rtol.values == 1e-10)   # no revolution needed a fallback tolerance
     kinds = ds.event_kind.values
     assert np.count_nonzero(kinds == "separation") >= REVOLUTIONS and np.count_nonzero(kinds == "impact") >= 100
@@ -72,7 +72,7 @@ def test_a_continuous_rigid_run_completes_where_captures_are_rare(rig, rpm):
     period = 2.0 * math.pi / w
     ds = simulate_translating(rig, w / (2 * math.pi), REVOLUTIONS * period, sample_rate=16 / period)
     assert ds.attrs["status"] == "completed"
-    section = poincare_section(rig, [rpm], transient=0, revolutions=REVOLUTIONS)
+    section = poincare_section(rig, [rpm / 60], transient=0, revolutions=REVOLUTIONS)   # [Hz]
     np.testing.assert_allclose(section.x.values[0], ds.x.values[16::16], rtol=0, atol=1e-5)
 
 

@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pytest
 
+from camdyn.analysis.poincare import poincare_section
 from camdyn.continuation.translating import trace_translating, translating_problem
 from camdyn.errors import ParameterError
 from camdyn.model.profiles import eccentric_circle
@@ -87,3 +88,15 @@ def test_the_continuation_of_the_translating_follower_reads_the_same_vocabulary(
             trace_translating(alzate_rig(), bad, RPM / 60)
         with pytest.raises(ParameterError, match="stop"):
             trace_translating(alzate_rig(), RPM / 60, bad)
+
+
+def test_the_poincare_section_reads_the_same_vocabulary():
+    omega = 2 * math.pi * (RPM / 60)   # [rad/s]
+    runs = [poincare_section(alzate_rig(), speed, transient=0, revolutions=1)
+            for speed in (f"{RPM} rpm", [RPM / 60], [f"{omega!r} rad/s"])]
+    for section in runs:
+        np.testing.assert_allclose(section.speed_rpm.values, [RPM], rtol=1e-15)
+        np.testing.assert_array_equal(section.x.values, runs[0].x.values)
+    for bad in ([0.0], [-1.0], [math.nan], ["-600 rpm"]):
+        with pytest.raises(ParameterError, match="speed"):
+            poincare_section(alzate_rig(), bad, transient=0, revolutions=1)

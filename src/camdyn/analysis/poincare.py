@@ -20,6 +20,7 @@ import numpy as np
 import xarray as xr
 
 from camdyn.errors import ParameterError, SimulationError
+from camdyn.params.units import parse_speed
 from camdyn.simulation.limits import LargeResultWarning
 from camdyn.simulation.translating import TranslatingFollower, simulate_translating
 
@@ -36,9 +37,12 @@ FALLBACK_RTOLS = (1e-9, 1e-11, 1e-8, 1e-12)
 
 
 def _check(speeds, transient, revolutions):
-    rpm = np.asarray(speeds, dtype=float).reshape(-1)
+    """The cam speeds [rpm] from ``speeds`` (Hz, or text with units), and the counts checked."""
+    items = np.asarray([speeds] if isinstance(speeds, str) else speeds, dtype=object).reshape(-1)
+    hz = np.array([parse_speed(s, "speeds") if isinstance(s, str) else float(s) for s in items], dtype=float)
+    rpm = 60.0 * hz
     if rpm.size == 0 or not np.all(np.isfinite(rpm)) or np.any(rpm <= 0.0):
-        raise ParameterError("the cam speeds must be positive and finite [rpm]")
+        raise ParameterError("the cam speeds must be positive and finite (a number is read as Hz)")
     for name, value, least in (("transient", transient, 0), ("revolutions", revolutions, 1)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
             raise ParameterError(f"{name} must be a whole number of revolutions, at least {least}, got {value!r}")
@@ -78,8 +82,9 @@ def poincare_section(follower: TranslatingFollower, speeds, transient: int = 100
     ----------
     follower : TranslatingFollower
         The follower and its cam.
-    speeds : array_like
-        Cam speeds [rpm].
+    speeds : array_like or str
+        Cam speeds [Hz] (revolutions per second), or text with units (``"358 rpm"``,
+        ``["6 Hz", "37.5 rad/s"]``). The result is tabulated over ``speed_rpm`` [rpm].
     transient, revolutions : int
         Revolutions dropped, then recorded [-].
     rtol : float

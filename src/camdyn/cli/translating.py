@@ -165,8 +165,9 @@ def bifurcation_translating_command(source: str, assignments, speeds: str, revol
     if not 0 <= discard < revolutions:
         raise ParameterError(f"--discard ({discard}) must be at least 0 and below --revolutions ({revolutions})")
     follower, spec = load_translating(source, parse_assignments(assignments))
-    rpm = 60.0 * parse_grid(speeds, "--speeds", "Hz")
-    section = poincare_section(follower, rpm, transient=discard, revolutions=revolutions - discard)
+    hz = parse_grid(speeds, "--speeds", "Hz")
+    rpm = 60.0 * hz
+    section = poincare_section(follower, hz, transient=discard, revolutions=revolutions - discard)
     section.attrs["name"] = spec.name
     save_netcdf(section, out)
     announce(out)
@@ -222,7 +223,7 @@ def continue_translating_command(source: str, assignments, parameter: str, start
         section = None
         if brute_force:
             from camdyn.analysis.poincare import poincare_section
-            section = poincare_section(follower, np.linspace(first, last, brute_force) / RPM, transient=200,
+            section = poincare_section(follower, np.linspace(first, last, brute_force) / (2.0 * math.pi), transient=200,
                                        revolutions=40)
         files.append(announce(plot_poincare_diagram(section, plot, None, branches=ds), json_out))
     found = [{"kind": str(k), "parameter": float(v), "speed_rpm": float(v) / RPM, "branch": int(b)}
