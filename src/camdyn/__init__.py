@@ -48,8 +48,8 @@ def __getattr__(name):
     if name in ("Model", "Quantity"):
         from camdyn.systems import protocol
         return getattr(protocol, name)
-    if name == "simulate":
-        from camdyn.simulation.runner import simulate
+    if name == "simulate":   # every family: objects, and configurations by name or file
+        from camdyn.io.sources import simulate
         return simulate
     if name in ("static_equilibrium", "natural_frequency"):
         from camdyn.model import equilibrium
