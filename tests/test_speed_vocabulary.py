@@ -20,6 +20,7 @@ from camdyn.errors import ParameterError
 from camdyn.model.profiles import eccentric_circle
 from camdyn.model.rocking_roller import RockingGeometry
 from camdyn.params.units import angular_speed
+from camdyn.simulation.mechanisms import CamDrive
 from camdyn.simulation.rocking_friction import simulate_rocking_friction
 from camdyn.simulation.rocking_roller import RockingFollower, simulate_rocking
 from camdyn.simulation.sliding import FollowerFriction, simulate_sliding
@@ -100,3 +101,15 @@ def test_the_poincare_section_reads_the_same_vocabulary():
     for bad in ([0.0], [-1.0], [math.nan], ["-600 rpm"]):
         with pytest.raises(ParameterError, match="speed"):
             poincare_section(alzate_rig(), bad, transient=0, revolutions=1)
+
+
+def test_a_drive_takes_its_speeds_as_text_with_units_and_keeps_bare_numbers_in_rad_per_s():
+    omega = 2 * math.pi * (RPM / 60)   # [rad/s]
+    for text in (f"{RPM} rpm", f"{RPM / 60} Hz", f"{omega!r} rad/s"):
+        motor = CamDrive(1e-3, "motor", stall_torque=1.0, free_speed=text)
+        assert motor.free_speed == pytest.approx(omega, rel=1e-15)
+        assert CamDrive(1e-3, "controller", target_speed=text).target_speed == pytest.approx(omega, rel=1e-15)
+    assert CamDrive(1e-3, "motor", stall_torque=1.0, free_speed=omega).free_speed == omega   # documented rad/s
+    for bad in ("3 mm", "nan rpm", "fast"):
+        with pytest.raises(ParameterError, match="free_speed"):
+            CamDrive(1e-3, "motor", stall_torque=1.0, free_speed=bad)

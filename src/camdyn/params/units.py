@@ -18,7 +18,7 @@ import pint
 
 from camdyn.errors import ParameterError, UnitError
 
-__all__ = ["registry", "parse_quantity", "parse_speed", "angular_speed", "format_quantity"]
+__all__ = ["registry", "parse_quantity", "parse_speed", "angular_speed", "speed_text_rad_s", "format_quantity"]
 
 
 @lru_cache(maxsize=1)
@@ -124,6 +124,19 @@ def parse_speed(text, key: str = "speed") -> float:
     raise UnitError(f"{key}: {text!r} is not a rotational speed; use Hz, rpm or rad/s")
 
 
+def speed_text_rad_s(text: str, key: str = "speed") -> float:
+    """Read text with a speed's unit (``"600 rpm"``, ``"10 Hz"``, ``"62.8 rad/s"``) and return
+    it in rad/s, of either sign; text in rad/s keeps its number exactly. Bare numbers in
+    text are Hz, as for :func:`parse_speed`."""
+    q = _quantity(text, key)
+    if not q.unitless and "radian" in str(q.units):
+        try:
+            return float(q.to(registry().radian / registry().second).magnitude)
+        except pint.DimensionalityError:
+            raise UnitError(f"{key}: {text!r} is not a rotational speed; use Hz, rpm or rad/s") from None
+    return 2.0 * math.pi * parse_speed(text, key)
+
+
 def angular_speed(speed, key: str = "speed") -> float:
     """Read a cam speed given at a public entry and return omega [rad/s].
 
@@ -134,13 +147,7 @@ def angular_speed(speed, key: str = "speed") -> float:
     """
     if isinstance(speed, bool) or not isinstance(speed, (numbers.Real, str)):
         raise ParameterError(f"{key} must be a number of Hz or text such as '358 rpm', got {speed!r}")
-    omega = None
-    if isinstance(speed, str):
-        q = _quantity(speed, key)
-        if not q.unitless and "radian" in str(q.units):
-            omega = float(q.to(registry().radian / registry().second).magnitude)
-    if omega is None:
-        omega = 2.0 * math.pi * parse_speed(speed, key)
+    omega = speed_text_rad_s(speed, key) if isinstance(speed, str) else 2.0 * math.pi * parse_speed(speed, key)
     if not (math.isfinite(omega) and omega > 0.0):
         raise ParameterError(f"{key} must be positive and finite, got {speed!r} (a number is read as Hz)")
     return omega

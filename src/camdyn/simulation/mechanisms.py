@@ -18,6 +18,7 @@ from camdyn.errors import ParameterError
 from camdyn.integrator import driver
 from camdyn.model import driven_cam, stick_slip
 from camdyn.params.system import System
+from camdyn.params.units import speed_text_rad_s
 from camdyn.simulation import limits
 from camdyn.simulation.runner import METHODS, default_max_step, default_scan, prepare
 from camdyn.systems import registry as systems
@@ -45,20 +46,21 @@ class CamDrive:
         Constant drive torque, or the controller's feed-forward [N m].
     stall_torque : float
         Motor torque at rest [N m].
-    free_speed : float
-        Motor's no-load speed [rad/s] (non-zero for a motor).
+    free_speed : float or str
+        Motor's no-load speed [rad/s] (non-zero for a motor), or text with units
+        (``"600 rpm"``, ``"10 Hz"``); a bare number stays rad/s.
     proportional : float
         Controller's proportional gain [N m s/rad].
     integral : float
         Controller's integral gain [N m/rad].
-    target_speed : float
-        Controller's speed set point [rad/s].
+    target_speed : float or str
+        Controller's speed set point [rad/s], or text with units.
     bearing_viscous : float
         Bearing's viscous friction coefficient [N m s/rad].
     bearing_coulomb : float
         Bearing's Coulomb friction torque [N m].
-    bearing_speed : float
-        Speed [rad/s] over which the Coulomb torque is smoothed (tanh).
+    bearing_speed : float or str
+        Speed [rad/s] (or text with units) over which the Coulomb torque is smoothed (tanh).
     """
 
     shaft_inertia: float
@@ -74,6 +76,9 @@ class CamDrive:
     bearing_speed: float = 1.0
 
     def __post_init__(self):
+        for name in ("free_speed", "target_speed", "bearing_speed"):   # text with units -> rad/s
+            if isinstance(getattr(self, name), str):
+                object.__setattr__(self, name, speed_text_rad_s(getattr(self, name), f"drive {name}"))
         if self.kind not in driven_cam.DRIVE_KINDS:
             raise ParameterError(f"drive kind must be one of {sorted(driven_cam.DRIVE_KINDS)}, got {self.kind!r}")
         for field in dataclasses.fields(self):
