@@ -342,8 +342,8 @@ def test_api_wrong_types_and_misspelled_keys_raise_camdyn_errors():
         camdyn.simulate(camdyn.load_system("sundar2014-impact"), speed="fast")
     with pytest.raises(camdyn.errors.CamdynError):
         camdyn.simulate(camdyn.load_system("sundar2014-impact"), revolutions="many")
-    with pytest.raises(camdyn.errors.CamdynError):
-        camdyn.simulate("sundar2014-impact")
+    with pytest.raises(camdyn.errors.CamdynError):   # a preset's name is taken; a misspelt one is refused
+        camdyn.simulate("sundar2014-impakt")
 
 
 @pytest.mark.slow
