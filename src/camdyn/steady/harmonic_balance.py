@@ -1,0 +1,270 @@
+"""Harmonic balance with the alternating frequency-time scheme (AFT) for a periodic
+problem whose dynamics is smooth over the orbit (one mode, no event on it).
+
+Method (Krack & Gross, *Harmonic Balance for Nonlinear Vibration Problems*, ch. 2-3):
+the unknowns ``y`` (first ``problem.unknowns`` state components, first-order form
+``y' = f(t, y)``) are written as the truncated real Fourier series
+
+    y(t) = a_0 + sum_{k=1..H} a_k cos(k w s) + b_k sin(k w s),   s = t - t_start,  w = 2 pi / T  [rad/s]
+
+with coefficients in the unit of each state component. The residual in the frequency
+domain is ``R(X) = nabla X - P f(t_j, E X)``: ``nabla`` the derivative in the basis
+(``a'_k = k w b_k``, ``b'_k = -k w a_k``), ``E`` the synthesis on the N grid times
+``t_j = t_start + j T / N`` and ``P`` the discrete Fourier projection (AFT). Its exact
+Jacobian is ``nabla - P J E`` with ``J = df/dy`` the model's own Jacobian at the grid
+times.
+
+Grid (anti-aliasing rule): a nonlinearity of polynomial degree ``q`` maps H harmonics to
+``qH``; the projection onto harmonics ``<= H`` is exact when ``N >= (q + 1) H + 1``. The
+default ``N`` is the power of two ``>= 8 H + 2`` (exact up to degree 7; the contact law's
+3/2 power and the friction law are not polynomial, so their aliasing error falls as their
+Fourier tail, which the convergence measure bounds).
+
+Stability by Hill's method: the Hill matrix is ``-dR/dX`` (the real-basis form of the
+complex Hill matrix); of its ``n (2H + 1)`` eigenvalues the ``n`` with the smallest
+imaginary parts are kept (NLvib's sorting) and the multipliers are ``exp(lambda T)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from camdyn.continuation.problem import Problem
+from camdyn.errors import ParameterError, SimulationError
+from camdyn.simulation import limits
+
+__all__ = ["HarmonicOrbit", "harmonic_balance", "hill_multipliers", "grid_size"]
+
+
+@dataclass(frozen=True)
+class HarmonicOrbit:
+    """A periodic orbit by harmonic balance.
+
+    Attributes
+    ----------
+    coefficients : ndarray (n, 2H + 1)
+        Per unknown component: ``[a_0, a_1, b_1, ..., a_H, b_H]`` in that component's unit.
+    times : ndarray (N,)
+        Grid times ``t_start + j T / N`` [s].
+    samples : ndarray (N, n)
+        The unknowns at the grid times (their units).
+    period : float
+        The forcing period T [s].
+    harmonics : int
+        H, the highest harmonic kept.
+    residual : float
+        Max-norm of the frequency-domain residual (unit of the state rates).
+    iterations : int
+        Newton iterations taken.
+    tail : float
+        Convergence measure [-]: the largest amplitude ``sqrt(a_k^2 + b_k^2)`` of the top
+        harmonics ``k > 3H/4`` over the largest amplitude of harmonics ``k >= 1``, taken
+        over the components, each in its own unit.
+    multipliers : ndarray (n,)
+        Floquet multipliers by Hill's method [-], largest magnitude first.
+    exponents : ndarray (n,)
+        The kept Floquet exponents lambda [1/s].
+    """
+
+    coefficients: np.ndarray
+    times: np.ndarray
+    samples: np.ndarray
+    period: float
+    harmonics: int
+    residual: float
+    iterations: int
+    tail: float
+    multipliers: np.ndarray
+    exponents: np.ndarray
+
+    @property
+    def stable(self) -> bool:
+        """All multipliers inside the unit circle."""
+        return bool(np.all(np.abs(self.multipliers) < 1.0))
+
+    def amplitudes(self) -> np.ndarray:
+        """``(n, H)``: amplitude ``sqrt(a_k^2 + b_k^2)`` of harmonics 1..H (state units)."""
+        c = self.coefficients
+        return np.hypot(c[:, 1::2], c[:, 2::2])
+
+
+def grid_size(harmonics: int) -> int:
+    """N: the power of two ``>= 8 H + 2`` (anti-aliasing rule ``N >= (q + 1) H + 1``, q = 7)."""
+    return 1 << int(math.ceil(math.log2(8 * harmonics + 2)))
+
+
+def _bases(harmonics: int, count: int, omega: float):
+    """Synthesis E (N, 2H+1), projection P (2H+1, N) and derivative nabla (2H+1, 2H+1)."""
+    phase = 2.0 * math.pi * np.arange(count) / count
+    k = np.arange(1, harmonics + 1)
+    synth = np.empty((count, 2 * harmonics + 1))
+    synth[:, 0] = 1.0
+    synth[:, 1::2] = np.cos(np.outer(phase, k))
+    synth[:, 2::2] = np.sin(np.outer(phase, k))
+    project = synth.T * (2.0 / count)
+    project[0] *= 0.5
+    nabla = np.zeros((2 * harmonics + 1, 2 * harmonics + 1))
+    for h in k:                                                   # a'_k = k w b_k, b'_k = -k w a_k
+        nabla[2 * h - 1, 2 * h] = h * omega
+        nabla[2 * h, 2 * h - 1] = -h * omega
+    return synth, project, nabla
+
+
+class _Model:
+    """The problem's rhs and Jacobian at every grid time, through its driver's compiled
+    registry (``problem.engine().systems``)."""
+
+    def __init__(self, problem: Problem, value: float):
+        self.problem, self.value = problem, value
+        self.p, self.period = problem.build(value)
+        self.systems = problem.engine().systems
+        self.system = problem.system_id
+        self.n = problem.template.size
+        self.u = problem.unknowns
+
+    def evaluate(self, times: np.ndarray, samples: np.ndarray):
+        """rates (N, u) and Jacobians (N, u, u) at the unknowns ``samples`` (N, u)."""
+        sys, n, u = self.systems, self.n, self.u
+        rates = np.empty((times.size, u))
+        jacs = np.empty((times.size, u, u))
+        mode = np.zeros(int(sys.mode_size(self.system)))
+        y, f, jac = np.empty(n), np.empty(n), np.empty((n, n))
+        for j, t in enumerate(times):
+            y[:] = self.problem.full_state(samples[j], self.value)
+            if j == 0:
+                sys.initial_mode(self.system, float(t), y, self.p, mode)
+            sys.rhs(self.system, float(t), y, mode, self.p, f)
+            sys.jacobian(self.system, float(t), y, f, mode, self.p, jac)
+            rates[j] = f[:u]
+            jacs[j] = jac[:u, :u]
+        return rates, jacs, mode
+
+    def guard_changes(self, times: np.ndarray, samples: np.ndarray, mode: np.ndarray) -> list[int]:
+        """Active guards (expected sign not 0 in ``mode``) whose sign differs from the
+        expected one somewhere on the sampled orbit (none for a problem without impacts,
+        whose guards only mark crossings: the forced oscillator's)."""
+        sys = self.systems
+        if not self.problem.impacts:
+            return []
+        states = np.array([self.problem.full_state(s, self.value) for s in samples])
+        out, changed = np.empty(times.size), []
+        for k in range(int(sys.guard_count(self.system))):
+            sign = float(sys.expected_sign(self.system, k, mode, self.p))
+            if sign == 0.0:
+                continue
+            sys.guard_samples(self.system, self.p, times, states, k, out)
+            if np.any(out * sign < 0.0):
+                changed.append(k)
+        return changed
+
+
+def _newton(model: _Model, coefficients: np.ndarray, harmonics: int, tolerance: float, max_iterations: int):
+    count = grid_size(harmonics)
+    omega = 2.0 * math.pi / model.period
+    synth, project, nabla = _bases(harmonics, count, omega)
+    times = model.problem.t_start + model.period * np.arange(count) / count
+    u, m = model.u, 2 * harmonics + 1
+    x = coefficients.copy()
+    step_norm = math.inf
+    for iteration in range(max_iterations + 1):
+        samples = (synth @ x.T)                                   # (N, u)
+        rates, jacs, mode = model.evaluate(times, samples)
+        residual = (x @ nabla.T - (project @ rates).T).ravel()    # R = nabla X - P f
+        # dR/dX[c j, d i] = nabla[j, i] delta_cd - sum_k P[j, k] J_k[c, d] E[k, i]
+        jac = np.einsum("cd,ji->cjdi", np.eye(u), nabla) - np.einsum("jk,kcd,ki->cjdi", project, jacs, synth)
+        jac = jac.reshape(u * m, u * m)
+        norm = float(np.max(np.abs(residual)))
+        scale = max(float(np.max(np.abs(x))) * omega, 1e-300)
+        if iteration > 0 and (norm <= tolerance * scale or step_norm <= 1e-14 * scale / omega):
+            return x, times, samples, norm, iteration, jac, mode
+        if iteration == max_iterations:
+            break
+        step = np.linalg.solve(jac, -residual).reshape(u, m)
+        step_norm = float(np.max(np.abs(step)))
+        x = x + step
+    raise SimulationError(f"harmonic balance did not converge in {max_iterations} Newton iterations "
+                          f"(residual {norm:.3g}); try a better guess or shooting (continuation.orbits.find_orbit)")
+
+
+def hill_multipliers(jacobian: np.ndarray, unknowns: int, period: float) -> tuple[np.ndarray, np.ndarray]:
+    """Floquet exponents [1/s] and multipliers [-] by Hill's method: eigenvalues of the
+    Hill matrix ``-dR/dX``, the ``unknowns`` with the smallest |imaginary part| kept,
+    ``mu = exp(lambda T)``; multipliers largest magnitude first."""
+    values = np.linalg.eigvals(-jacobian)
+    kept = values[np.argsort(np.abs(values.imag), kind="stable")[:unknowns]]
+    multipliers = np.exp(kept * period)
+    order = np.argsort(-np.abs(multipliers), kind="stable")
+    return kept[order], multipliers[order]
+
+
+def _tail(x: np.ndarray, harmonics: int) -> float:
+    amp = np.hypot(x[:, 1::2], x[:, 2::2])
+    top = amp[:, int(math.floor(0.75 * harmonics)):]              # harmonics k > 3H/4
+    largest = float(np.max(amp))
+    return float(np.max(top)) / largest if largest > 0 else 0.0
+
+
+def _resize(x: np.ndarray, harmonics: int) -> np.ndarray:
+    out = np.zeros((x.shape[0], 2 * harmonics + 1))
+    m = min(x.shape[1], out.shape[1])
+    out[:, :m] = x[:, :m]
+    return out
+
+
+def _guess(model: _Model, harmonics: int, guess) -> np.ndarray:
+    if guess is not None:
+        g = np.asarray(guess, float)
+        if g.ndim == 2:
+            return _resize(g, harmonics)
+        return _resize(g.reshape(model.u, 1), harmonics)         # a constant state
+    return _resize(model.problem.template[:model.u].reshape(model.u, 1).astype(float), harmonics)
+
+
+def harmonic_balance(problem: Problem, harmonics: int | str = "auto", guess=None, value: float | None = None,
+                     tolerance: float = 1e-11, tail_tolerance: float = 1e-8, max_harmonics: int = 128,
+                     max_iterations: int = 40) -> HarmonicOrbit:
+    """The periodic orbit of ``problem`` at its parameter ``value`` by harmonic balance (AFT).
+
+    Parameters
+    ----------
+    harmonics : int or "auto"
+        H. "auto": H = 2, 4, 8, ... until the convergence measure ``tail`` is below
+        ``tail_tolerance`` [-] (each solve starts from the last).
+    guess : array or None
+        Coefficients (n, 2H'+1) (any H', padded or cut) or a constant state (n,); None:
+        the problem's template state.
+    tolerance : float
+        Newton stops when ``max|R| <= tolerance * w max|X|`` [-], or the step is below
+        1e-14 of the largest coefficient.
+
+    Raises
+    ------
+    SimulationError
+        Newton fails, or an active guard changes sign on the orbit (contact lost, an
+        impact): the dynamics is not smooth over it; use shooting
+        (:func:`camdyn.continuation.orbits.find_orbit`).
+    """
+    limits.check_number("tolerance", tolerance)
+    model = _Model(problem, problem.value if value is None else float(value))
+    auto = harmonics == "auto"
+    if not auto and (not isinstance(harmonics, int) or harmonics < 0):
+        raise ParameterError(f"harmonics must be a non-negative integer or 'auto', got {harmonics!r}")
+    h = 2 if auto else int(harmonics)
+    x = _guess(model, h, guess)
+    while True:
+        x, times, samples, norm, iterations, jac, mode = _newton(model, x, h, tolerance, max_iterations)
+        tail = _tail(x, h)
+        if not auto or tail <= tail_tolerance or 2 * h > max_harmonics:
+            break
+        h *= 2
+        x = _resize(x, h)
+    changed = model.guard_changes(times, samples, mode)
+    if changed:
+        raise SimulationError(f"guard(s) {changed} change sign on the harmonic-balance orbit (contact lost or an "
+                              "impact): the dynamics is not smooth over the orbit; use shooting "
+                              "(camdyn.continuation.orbits.find_orbit)")
+    exponents, multipliers = hill_multipliers(jac, model.u, model.period)
+    return HarmonicOrbit(x, times, samples, model.period, h, norm, iterations, tail, multipliers, exponents)
