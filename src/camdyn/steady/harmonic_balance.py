@@ -30,13 +30,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.simulation import limits
 
-__all__ = ["HarmonicOrbit", "harmonic_balance", "hill_multipliers", "grid_size"]
+__all__ = ["HarmonicOrbit", "harmonic_balance", "hill_multipliers", "grid_size", "grid_values"]
 
 
 @dataclass(frozen=True)
@@ -113,6 +114,18 @@ def _bases(harmonics: int, count: int, omega: float):
     return synth, project, nabla
 
 
+@numba.njit(cache=False)   # its first two arguments are dispatchers: compiled per process (about 4 s)
+def grid_values(rhs, jacobian, system, times, states, mode, p, rates, jacs):
+    """The model's rates ``rates[j] = f(t_j, y_j)`` and Jacobians ``jacs[j] = df/dy`` at
+    every grid time ``times[j]`` [s] and full state ``states[j]`` in mode ``mode``, by the
+    driver's compiled registry functions ``rhs`` and ``jacobian``, in one call."""
+    f = np.empty(states.shape[1])
+    for j in range(times.shape[0]):
+        rhs(system, times[j], states[j], mode, p, f)
+        jacobian(system, times[j], states[j], f, mode, p, jacs[j])
+        rates[j] = f
+
+
 class _Model:
     """The problem's rhs and Jacobian at every grid time, through its driver's compiled
     registry (``problem.engine().systems``)."""
@@ -127,19 +140,15 @@ class _Model:
 
     def evaluate(self, times: np.ndarray, samples: np.ndarray):
         """rates (N, u) and Jacobians (N, u, u) at the unknowns ``samples`` (N, u)."""
-        sys, n, u = self.systems, self.n, self.u
-        rates = np.empty((times.size, u))
-        jacs = np.empty((times.size, u, u))
+        sys, u = self.systems, self.u
+        states = np.tile(self.problem.full_state(samples[0], self.value), (times.size, 1))
+        states[:, :u] = samples
         mode = np.zeros(int(sys.mode_size(self.system)))
-        y, f, jac = np.empty(n), np.empty(n), np.empty((n, n))
-        for j, t in enumerate(times):
-            y[:] = self.problem.full_state(samples[j], self.value)
-            if j == 0:
-                sys.initial_mode(self.system, float(t), y, self.p, mode)
-            sys.rhs(self.system, float(t), y, mode, self.p, f)
-            sys.jacobian(self.system, float(t), y, f, mode, self.p, jac)
-            rates[j] = f[:u]
-            jacs[j] = jac[:u, :u]
+        sys.initial_mode(self.system, float(times[0]), states[0], self.p, mode)
+        rates = np.empty_like(states)
+        jacs = np.empty((times.size, self.n, self.n))
+        grid_values(sys.rhs, sys.jacobian, self.system, times, states, mode, self.p, rates, jacs)
+        rates, jacs = rates[:, :u], jacs[:, :u, :u]
         return rates, jacs, mode
 
     def guard_changes(self, times: np.ndarray, samples: np.ndarray, mode: np.ndarray) -> list[int]:
