@@ -1,6 +1,7 @@
 """Harmonic balance (AFT) against outside references: the forced linear oscillator's
 closed-form steady state and Floquet multipliers, the chapter 4 rig's orbit by shooting
-(an independent method) and Liouville's formula for the product of its multipliers."""
+(an independent method), its cam harmonics of alpha_ddot by a long simulation's last
+revolutions (numpy FFT), and Liouville's formula for the product of its multipliers."""
 
 import math
 
@@ -71,3 +72,20 @@ def test_deliberate_mistakes_are_caught(rig):
     assert too_few.tail > 1e-6                          # the measure flags H = 3 as unresolved
     coarse = harmonic_balance(problem, harmonics=8, guess=shot.state)   # orbit resolved, contact mode not
     assert not np.allclose(np.abs(coarse.multipliers), np.abs(shot.multipliers), rtol=1e-2)
+
+
+def test_rig_alpha_ddot_harmonics_equal_a_long_simulation(rig):
+    problem, shot = rig
+    orbit = harmonic_balance(problem, guess=shot.state)
+    speed = problem.value                                              # [Hz]
+    per_rev, revs, last = 256, 60, 10
+    ds = camdyn.simulate("sundar2014-friction", revolutions=revs, sample_rate=speed * per_rev, rtol=1e-11)
+    tail = ds.alpha_ddot.values[(revs - last) * per_rev:(revs - last) * per_rev + last * per_rev]
+    assert bool(ds.in_contact.values[-last * per_rev:].all())
+    spectrum = 2.0 * np.fft.fft(tail) / tail.size                      # c_k = A_k - i B_k at bin last k
+    omega = 2 * math.pi * speed
+    a, b = orbit.coefficients[1, 1::2], orbit.coefficients[1, 2::2]    # alpha_dot's [rad/s]
+    k = np.arange(1, 5)                                                # alpha_ddot = d/dt alpha_dot
+    hb = k * omega * b[:4] + 1j * k * omega * a[:4]
+    # 1e-6 of the largest of harmonics 1-4 (the 4th, 1e-3 of the 1st, agrees to 1e-6 of itself)
+    assert np.max(np.abs(spectrum[last * k] - hb)) < 1e-6 * np.max(np.abs(hb))
