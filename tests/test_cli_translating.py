@@ -108,3 +108,13 @@ def test_bifurcation_of_a_translating_follower(tmp_path):
     assert section.sizes["revolution"] == 2 and (tmp_path / "section.png").is_file()
     status, _, err = run("bifurcation", "alzate", "--workers", "2", "--out", tmp_path / "other.nc")
     assert status == 2 and "--workers" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("argv", [["continue", "roller-friction", "--from", "5Hz", "--to", "6Hz"],
+                                  ["bifurcation", "roller-friction", "--speeds", "5Hz:6Hz:3"]])
+def test_friction_at_the_contact_is_refused_where_it_would_be_ignored(argv, tmp_path):
+    """The continuation and the diagram integrate the translating follower without its
+    [friction] table; with one they refuse rather than return another system's results."""
+    status, out, err = run(*argv, "--out", tmp_path / "x.nc")
+    assert status == 2 and "does not take friction at the cam contact" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "x.nc").exists()

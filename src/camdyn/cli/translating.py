@@ -147,6 +147,20 @@ def simulate_translating_command(source: str, assignments, speed: str | None, re
     report_run(ds, summary, "simulate-translating", _print, out, json_out, plot, draw)
 
 
+def _without_friction(source: str, assignments, command: str):
+    """The follower and its configuration, refused where the configuration has friction
+    at the cam contact: the diagram and the continuation integrate the follower without
+    it, so their results would not be this configuration's."""
+    from camdyn.io.lift_table import load_translating
+    from camdyn.simulation.sliding import friction_from_spec
+
+    follower, spec = load_translating(source, parse_assignments(assignments))
+    if friction_from_spec(spec) is not None:
+        raise ParameterError(f"{command} does not take friction at the cam contact yet ({spec.name} has a "
+                             "[friction] table); camdyn simulate runs it with its friction")
+    return follower, spec
+
+
 def bifurcation_translating_command(source: str, assignments, speeds: str, revolutions: int, discard: int,
                                     out: Path, plot: Path | None, workers: int | None, dask: str | None,
                                     quiet: bool) -> None:
@@ -155,7 +169,6 @@ def bifurcation_translating_command(source: str, assignments, speeds: str, revol
     ``out`` and drawn to ``plot`` (the outputs are checked already)."""
     from camdyn.analysis.poincare import poincare_section
     from camdyn.cli.common import parse_grid
-    from camdyn.io.lift_table import load_translating
     from camdyn.io.netcdf import save_netcdf
     from camdyn.plotting.translating import plot_poincare_diagram
     from camdyn.simulation.translating import liftoff_speed
@@ -164,7 +177,7 @@ def bifurcation_translating_command(source: str, assignments, speeds: str, revol
         raise ParameterError("--workers and --dask: the translating follower's diagram runs in one process")
     if not 0 <= discard < revolutions:
         raise ParameterError(f"--discard ({discard}) must be at least 0 and below --revolutions ({revolutions})")
-    follower, spec = load_translating(source, parse_assignments(assignments))
+    follower, spec = _without_friction(source, assignments, "camdyn bifurcation")
     hz = parse_grid(speeds, "--speeds", "Hz")
     rpm = 60.0 * hz
     section = poincare_section(follower, hz, transient=discard, revolutions=revolutions - discard)
@@ -194,7 +207,6 @@ def continue_translating_command(source: str, assignments, parameter: str, start
     from camdyn.continuation.branches import MIN_STEP
     from camdyn.continuation.results import switch_doublings
     from camdyn.continuation.translating import RPM, SPEED_KEY, trace_translating, translating_dataset
-    from camdyn.io.lift_table import load_translating
 
     if parameter != SPEED_KEY:
         raise ParameterError(f"--parameter {parameter}: a translating follower is continued in {SPEED_KEY} only")
@@ -208,7 +220,7 @@ def continue_translating_command(source: str, assignments, parameter: str, start
         raise ParameterError("--doublings must be at least 0, --brute-force 0 or at least 2")
     if brute_force and plot is None:
         raise ParameterError("--brute-force draws the diagram under the branches of --plot: give --plot")
-    follower, spec = load_translating(source, parse_assignments(assignments))
+    follower, spec = _without_friction(source, assignments, "camdyn continue")
     problem, branch = trace_translating(follower, f"{float(first)!r} rad/s", f"{float(last)!r} rad/s", period,
                                         step=step, max_points=max_points, transient=transient)
     branches = [branch, *switch_doublings(problem, branch, last, doublings, step, max_points)]
