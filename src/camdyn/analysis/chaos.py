@@ -27,10 +27,12 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from camdyn.analysis.lyapunov import check_periods
+from camdyn.analysis.lyapunov import check_periods, count
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.integrator import driver
+from camdyn.model.equilibrium import as_system
 from camdyn.params.system import System
+from camdyn.simulation import limits
 from camdyn.simulation.limits import SCAN_FRACTION, STEP_FRACTION
 from camdyn.systems import registry as systems
 
@@ -128,19 +130,19 @@ def lyapunov_exponent(system: System, speed: float | None = None, revolutions: i
     rtol, atol : float
         Local error tolerances.
     """
-    from camdyn.simulation.runner import prepare
+    from camdyn.simulation.runner import prepare, with_speed
 
+    system = as_system(system)
     if system.motion.kind != "constant":
         raise ParameterError("the Lyapunov exponent here needs constant cam motion (motion.kind = 'constant')")
-    if speed is not None:
-        system = system.with_values(**{"motion.speed": float(speed)})
-    for name, value in (("revolutions", revolutions), ("transient", transient)):
-        if not (isinstance(value, int) and value >= (1 if name == "revolutions" else 0)):
-            raise ParameterError(f"{name} must be a whole number >= {1 if name == 'revolutions' else 0}, "
-                                 f"got {value!r}")
+    system = with_speed(system, speed)
+    revolutions = count("revolutions", revolutions, 1)
+    transient = count("transient", transient, 0)
     check_periods(revolutions, transient, 1)
+    separation = limits.check_number("separation", separation, "rad")
     if not (0 < separation < 1e-3):
         raise ParameterError(f"separation must lie in (0, 1e-3) rad, got {separation!r}")
+    limits.check_tolerances(rtol, atol)
     period = system.motion.period
     if not math.isfinite(period):
         raise ParameterError("the cam does not move (speed 0)")

@@ -13,11 +13,48 @@ __all__ = ["harmonic_amplitudes", "amplitude_spectrum", "steady_window", "fit_ha
            "estimate_speed"]
 
 
+#: ``variable`` of :func:`_checked` when no variable is needed.
+_ANY = object()
+
+
+def _checked(ds, variable, speed) -> float:
+    """The cam speed [Hz] of a result ``ds`` (``speed`` given, or its ``speed_hz``
+    attribute); a ParameterError for what is not a result over ``time`` holding
+    ``variable``, or for a speed that is not positive and finite."""
+    if not isinstance(ds, xr.Dataset) or "time" not in ds or ds.sizes.get("time", 0) < 2:
+        raise ParameterError(f"expected a result over time (an xarray Dataset from camdyn.simulate or "
+                             f"read_measurement), got {type(ds).__name__} {ds!r:.60}")
+    if variable is not _ANY and (not isinstance(variable, str) or variable not in ds):
+        raise ParameterError(f"the result holds no variable {variable!r}; it holds {', '.join(map(str, ds.data_vars))}")
+    if speed is None:
+        if ds.attrs.get("speed_hz") is None:
+            raise ParameterError("the result has no speed_hz attribute: give the cam speed [Hz]")
+        try:
+            speed = float(ds.attrs["speed_hz"])
+        except (TypeError, ValueError):
+            raise ParameterError(f"the result's speed_hz attribute is not a number of Hz: "
+                                 f"{ds.attrs['speed_hz']!r:.60}") from None
+    if isinstance(speed, bool) or not isinstance(speed, (int, float, np.integer, np.floating)) or not (
+            math.isfinite(speed) and speed > 0):
+        raise ParameterError(f"the cam speed must be a positive, finite number of Hz, got {speed!r}")
+    return float(speed)
+
+
+def _revolutions(revolutions) -> float:
+    if isinstance(revolutions, bool) or not isinstance(revolutions, (int, float, np.integer, np.floating)) or not (
+            math.isfinite(revolutions) and revolutions > 0):
+        raise ParameterError(f"revolutions must be a positive, finite number, got {revolutions!r}")
+    return float(revolutions)
+
+
 def steady_window(ds: xr.Dataset, revolutions: float, speed: float | None = None) -> xr.Dataset:
     """The last ``revolutions`` whole cam periods of a result (end point excluded)."""
-    speed = speed or float(ds.attrs["speed_hz"])
+    speed = _checked(ds, _ANY, speed)
+    revolutions = _revolutions(revolutions)
     t = ds["time"].values
     fs = 1.0 / (t[1] - t[0])
+    if not (math.isfinite(fs) and fs > 0):
+        raise ParameterError("the result's time does not increase")
     n = int(round(revolutions * fs / speed))
     if n < 8 or n > t.size - 1:
         raise ParameterError(f"the record holds {t.size} samples; {revolutions} revolutions need {n}")
@@ -33,7 +70,13 @@ def harmonic_amplitudes(ds: xr.Dataset, variable: str = "alpha_ddot", orders=(1,
     the window holds a whole number of samples per revolution (true to within one
     sample otherwise).
     """
-    speed = speed or float(ds.attrs["speed_hz"])
+    speed = _checked(ds, variable, speed)
+    try:
+        orders = np.asarray(orders, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ParameterError(f"orders must be harmonic numbers, got {orders!r}") from None
+    if orders.size == 0 or not np.all(np.isfinite(orders)):
+        raise ParameterError(f"orders must be finite harmonic numbers, got {orders!r}")
     win = steady_window(ds, revolutions, speed)
     t = win["time"].values
     x = win[variable].values
@@ -46,10 +89,10 @@ def harmonic_amplitudes(ds: xr.Dataset, variable: str = "alpha_ddot", orders=(1,
 def amplitude_spectrum(ds: xr.Dataset, variable: str = "alpha_ddot", revolutions: int | None = None):
     """Single-sided amplitude spectrum (frequency [Hz], amplitude [unit of the variable])
     over whole revolutions, Hann-windowed (amplitude-corrected) against leakage."""
-    speed = float(ds.attrs["speed_hz"])
+    speed = _checked(ds, variable, None)
     t = ds["time"].values
     total = (t[-1] - t[0]) * speed
-    revs = revolutions or max(1, int(total // 2))
+    revs = _revolutions(revolutions) if revolutions is not None else max(1, int(total // 2))
     win = steady_window(ds, revs, speed)
     x = win[variable].values - np.mean(win[variable].values)
     fs = 1.0 / (t[1] - t[0])

@@ -16,6 +16,7 @@ pull (``Fn < 0``); Coulomb friction's assumption of one sliding direction fails 
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numba
@@ -26,7 +27,7 @@ from scipy.optimize import brentq
 from camdyn.errors import GeometryError, ParameterError
 from camdyn.model import layout as L
 from camdyn.model.dynamics import evaluate
-from camdyn.model.equilibrium import static_equilibrium, touch_angle
+from camdyn.model.equilibrium import as_system, static_equilibrium, touch_angle
 from camdyn.model.friction import friction_coefficient
 from camdyn.model.geometry import (
     cam_angle,
@@ -37,6 +38,13 @@ from camdyn.model.geometry import (
 )
 from camdyn.model.outputs import pivot_reaction
 from camdyn.params.system import System
+from camdyn.params.units import parse_speed
+
+#: Highest cam speed inverse kinematics takes [Hz] (6 million rpm; far beyond any cam,
+#: and the accelerations squared stay finite).
+HIGHEST_SPEED = 1e5
+#: Most samples per revolution [-] (the derivatives are spectral: 1024 is ample).
+MOST_POINTS = 2 ** 20
 
 __all__ = ["inverse_kinematics", "loss_of_contact_speed", "KinematicCheck", "check_regime", "contact_start"]
 
@@ -91,8 +99,8 @@ def _spectral_derivatives(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _angles(system: System, points: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if system.motion.kind != "constant":
         raise ParameterError("inverse kinematics needs constant cam motion (motion.kind = 'constant')")
-    if not (isinstance(points, int) and points >= 32):
-        raise ParameterError(f"points must be an integer >= 32, got {points!r}")
+    if not (isinstance(points, int) and 32 <= points <= MOST_POINTS):
+        raise ParameterError(f"points must be an integer from 32 to {MOST_POINTS}, got {points!r}")
     p = L.pack(system, initial_angle=0.0)
     thetas = 2.0 * np.pi * np.arange(points) / points
     start = touch_angle(p, 0.0)
@@ -127,9 +135,12 @@ def inverse_kinematics(system: System, speed: float | None = None, points: int =
         Attributes: ``speed_hz``, ``contact_kept`` (min Fn > 0), ``sliding_reversal``
         (vr changes sign), ``min_contact_force`` [N].
     """
-    hz = system.motion.speed if speed is None else float(speed)
-    if not (math.isfinite(hz) and hz >= 0):
-        raise ParameterError(f"speed must be a finite, non-negative number of Hz, got {speed!r}")
+    system = as_system(system)
+    if speed is not None and (isinstance(speed, bool) or not isinstance(speed, (numbers.Real, str))):
+        raise ParameterError(f"speed must be a number of Hz or text such as '960 rpm', got {speed!r:.60}")
+    hz = system.motion.speed if speed is None else parse_speed(speed)
+    if not (math.isfinite(hz) and 0 <= hz <= HIGHEST_SPEED):
+        raise ParameterError(f"speed must be a number of Hz from 0 to {HIGHEST_SPEED:g}, got {speed!r}")
     p, thetas, alpha = _angles(system, points)
     omega = system.motion.direction * 2.0 * math.pi * hz
     d1, d2 = _spectral_derivatives(alpha)

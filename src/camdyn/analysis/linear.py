@@ -197,8 +197,9 @@ def linearize(system: System, speed=None) -> LinearModel:
     ParameterError
         For an elliptic cam, or a follower that does not rest on the concentric cam.
     """
+    from camdyn.model.equilibrium import as_system
     from camdyn.simulation.runner import prepare, with_speed
-    system = with_speed(system, speed)
+    system = with_speed(as_system(system), speed)
     if system.profile is not None:
         raise ParameterError("the linearized model needs the closed-form circular cam, not a cam profile")
     if system.cam.semi_major != system.cam.semi_minor:
@@ -222,7 +223,10 @@ def linearize(system: System, speed=None) -> LinearModel:
         raise ParameterError(f"the linearized stiffness is {k:.3g} N m/rad: the equilibrium is not stable")
     motion = system.motion
     hz = float(motion.speed) if motion.kind == "constant" else 0.0
-    period = 1.0 / hz if hz > 0 else 1.0 / float(motion.frequency)
+    cycle = hz if motion.kind == "constant" else float(motion.frequency)   # [Hz]
+    if not cycle > 0:
+        raise ParameterError("the cam does not move (speed 0): the linearized model needs a forcing period")
+    period = 1.0 / cycle
     p[L.RUNOUT] = 0.0
     return LinearModel(inertia=system.follower.inertia, stiffness=k, damping=c, equilibrium_angle=a,
                        runout=system.cam.runout, speed=hz, period=period, _p=p, _slip=slip)

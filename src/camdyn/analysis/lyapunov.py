@@ -45,7 +45,7 @@ from camdyn.params.system import System
 from camdyn.simulation import limits
 from camdyn.systems import registry as systems
 
-__all__ = ["LyapunovSpectrum", "model_spectrum", "lyapunov_spectrum", "check_periods", "MAX_PERIODS"]
+__all__ = ["LyapunovSpectrum", "model_spectrum", "lyapunov_spectrum", "check_periods", "count", "MAX_PERIODS"]
 
 #: Accepted steps allowed per interval [-], and events logged per interval [-].
 MAX_STEPS = 50_000_000
@@ -114,7 +114,8 @@ class LyapunovSpectrum:
         return j + float(partial[j - 1]) / abs(float(ordered[j]))
 
 
-def _count(name: str, value, low: int) -> int:
+def count(name: str, value, low: int) -> int:
+    """``value`` as an int, or a ParameterError unless it is a whole number >= ``low``."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
         raise ParameterError(f"{name} must be a whole number >= {low}, got {value!r}")
     return int(value)
@@ -191,8 +192,8 @@ def model_spectrum(system_id: int, p, y0, period: float, periods: int = 400, tra
     LyapunovSpectrum
     """
     system_id, p, y0, period, weights = _checked(system_id, p, y0, period, weights, rtol, atol)
-    periods = _count("periods", periods, 1)
-    transient = _count("transient", transient, 0)
+    periods = count("periods", periods, 1)
+    transient = count("transient", transient, 0)
     check_periods(periods, transient, np.size(weights))
     t_start = limits.check_number("t_start", t_start, "s")
     h_max, scan = limits.step_limits(period, system_id)
@@ -276,8 +277,8 @@ def lyapunov_spectrum(system: System, speed: float | None = None, revolutions: i
     if system.motion.kind != "constant":
         raise ParameterError("the Lyapunov spectrum here needs constant cam motion (motion.kind = 'constant')")
     system = with_speed(system, speed)
-    revolutions = _count("revolutions", revolutions, 1)
-    transient = _count("transient", transient, 0)
+    revolutions = count("revolutions", revolutions, 1)
+    transient = count("transient", transient, 0)
     check_periods(revolutions, transient, 2)
     limits.check_tolerances(rtol, atol)
     period = system.motion.period

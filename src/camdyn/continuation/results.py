@@ -17,6 +17,7 @@ from camdyn.continuation.switching import switch_branch
 from camdyn.errors import CamdynError, ParameterError
 from camdyn.model.equilibrium import as_system
 from camdyn.params.system import System
+from camdyn.simulation import limits
 
 #: The first period-``2k`` orbit's distance from a period doubling (scaled,
 #: :func:`~camdyn.continuation.switching.doubled_orbit`) for a cam under its drive
@@ -30,6 +31,15 @@ __all__ = ["check_trace_settings", "parameter_value", "trace_branch", "switch_do
            "branch_records", "bifurcation_records", "branches_dataset"]
 
 
+def _real(value) -> bool:
+    return not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating))
+
+
+def _whole(value, low: int) -> bool:
+    """Whether ``value`` is a whole number (an int, or a float without a fraction) >= ``low``."""
+    return _real(value) and math.isfinite(value) and int(value) == value and value >= low
+
+
 def check_trace_settings(start: float, stop: float, periods, segments, transient, max_points, step: float,
                          period_name: str) -> None:
     """Refuse, before any work, a branch's range ``start``-``stop`` [the parameter's unit]
@@ -38,11 +48,11 @@ def check_trace_settings(start: float, stop: float, periods, segments, transient
     step out of range."""
     if not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
         raise ParameterError(f"the range must be two different finite values, got {start} and {stop}")
-    if int(periods) != periods or periods < 1:
-        raise ParameterError(f"the period must be a positive integer number of {period_name}, got {periods}")
-    if isinstance(segments, bool) or int(segments) != segments or segments < 1:
-        raise ParameterError(f"the number of shooting segments must be a positive integer, got {segments}")
-    if transient < 1 or max_points < 2 or not step >= MIN_STEP:
+    if not _whole(periods, 1):
+        raise ParameterError(f"the period must be a positive integer number of {period_name}, got {periods!r:.60}")
+    if not _whole(segments, 1):
+        raise ParameterError(f"the number of shooting segments must be a positive integer, got {segments!r:.60}")
+    if not _whole(transient, 1) or not _whole(max_points, 2) or not _real(step) or not step >= MIN_STEP:
         raise ParameterError(f"transient must be at least 1, max_points at least 2 and step at least {MIN_STEP:g}")
 
 
@@ -82,6 +92,9 @@ def trace_branch(system: System, key: str, start: float, stop: float, periods: i
         If no orbit is found at ``start``.
     """
     system = as_system(system)
+    if not isinstance(key, str):
+        raise ParameterError(f"key must be a parameter's dotted name such as 'motion.speed', got {key!r:.60}")
+    rtol = limits.check_number("rtol", rtol)
     start, stop = (parameter_value(key, value, name) for value, name in ((start, "start"), (stop, "stop")))
     check_trace_settings(start, stop, periods, segments, transient, max_points, step, "forcing periods")
     problem = system_problem(system.with_values(**{key: start}), key, rtol=rtol, atol=rtol * 1e-2)

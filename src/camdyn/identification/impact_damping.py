@@ -25,6 +25,7 @@ steps from the estimate.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -35,8 +36,9 @@ from camdyn.errors import IdentificationError, ParameterError
 from camdyn.identification.impact_events import ImpactEvents, impact_events
 from camdyn.identification.impact_kernel import simulate_impacts
 from camdyn.model import layout as L
+from camdyn.model.equilibrium import as_system
 from camdyn.model.geometry import cam_angle, contact_kinematics
-from camdyn.records.schema import check_consistency, require_record
+from camdyn.records.schema import check_consistency, record_speed, require_record
 from camdyn.simulation import limits
 
 __all__ = ["ImpactDampingEstimate", "ImpactProblem", "estimate_impact_damping", "residue_landscape",
@@ -161,9 +163,10 @@ def _objective(residue: str | None, exponent: float | None) -> str:
     arguments of :func:`estimate_impact_damping`."""
     if residue is None:
         residue = "lambda1" if exponent is not None else "combined"
-    if residue not in OBJECTIVES:
-        raise ParameterError(f"residue must be one of {', '.join(OBJECTIVES)}, got {residue!r}")
-    if exponent is not None and not (math.isfinite(exponent) and 0 <= exponent <= 5):
+    if not isinstance(residue, str) or residue not in OBJECTIVES:
+        raise ParameterError(f"residue must be one of {', '.join(OBJECTIVES)}, got {residue!r:.60}")
+    if exponent is not None and (isinstance(exponent, bool) or not isinstance(exponent, numbers.Real)
+                                 or not (math.isfinite(exponent) and 0 <= exponent <= 5)):
         raise ParameterError(f"the fixed exponent n must be between 0 and 5, got {exponent!r}")
     return residue
 
@@ -191,14 +194,24 @@ def _record_events(base, records, speed, runout, min_impacts: int, progress) -> 
     """
     if isinstance(records, xr.Dataset):
         records = [records]
+    if not isinstance(records, (list, tuple)) or not records:
+        raise ParameterError(f"records must be a record or a list of records (from read_measurement), got "
+                             f"{type(records).__name__} {records!r:.60}")
+    records = list(records)
     for i, rec in enumerate(records):
         require_record(rec, f"record (#{i + 1})")
         if any(rec is other for other in records[:i]):
             raise ParameterError(f"record #{i + 1} is the same record as an earlier one: each record must be a "
                                  f"different operating point (a record given twice counts its impacts twice)")
     n_rec = len(records)
-    speeds = speed if isinstance(speed, (list, tuple)) else [speed] * n_rec
-    runouts = runout if isinstance(runout, (list, tuple)) else [runout] * n_rec
+    speeds = list(speed) if isinstance(speed, (list, tuple)) else [speed] * n_rec
+    runouts = list(runout) if isinstance(runout, (list, tuple)) else [runout] * n_rec
+    if len(speeds) != n_rec or len(runouts) != n_rec:
+        raise ParameterError(f"give one speed and one runout per record ({n_rec}), or one for all; got "
+                             f"{len(speeds)} and {len(runouts)}")
+    speeds = [record_speed(sp, f"speed (record #{i + 1})") for i, sp in enumerate(speeds)]
+    runouts = [None if ro is None else limits.check_number(f"runout (record #{i + 1})", ro, "m")
+               for i, ro in enumerate(runouts)]
     events = []
     for rec, sp, ro in zip(records, speeds, runouts):
         check_consistency(rec, speed=sp, runout=ro, preset=base.name, what="the options")
@@ -320,7 +333,7 @@ def estimate_impact_damping(system, records, speed=None, runout=None, exponent: 
     """
     check_bootstrap(bootstrap)
     residue = _objective(residue, exponent)
-    base = system.with_values(**{"contact.damping": "power"})
+    base = as_system(system).with_values(**{"contact.damping": "power"})
     if events is None:
         events = _record_events(base, records, speed, runout, min_impacts, progress)
     else:

@@ -12,6 +12,7 @@ longer) or when the response has not decayed by the end of the record (leakage).
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -108,7 +109,10 @@ def half_power_damping(frequency: np.ndarray, response: np.ndarray,
     if freq.ndim != 1 or mag.shape != freq.shape or freq.size < 3:
         raise ParameterError(f"frequency [Hz] and response must be 1-D arrays of the same length, at least 3 "
                              f"spectral lines; got shapes {freq.shape} and {mag.shape}")
-    lo, hi = band if band is not None else (freq[1], freq[-1])
+    try:
+        lo, hi = (float(f) for f in band) if band is not None else (freq[1], freq[-1])
+    except (TypeError, ValueError):
+        raise ParameterError(f"the search band must be two frequencies [Hz], got {band!r:.60}") from None
     if not (0 <= lo < hi):
         raise ParameterError(f"the search band must be increasing frequencies, got {band!r}")
     sel = np.nonzero((freq >= lo) & (freq <= hi) & np.isfinite(mag))[0]
@@ -147,6 +151,25 @@ def half_power_damping(frequency: np.ndarray, response: np.ndarray,
                         upper=float(f2), peak=float(math.sqrt(peak_sq)), lines=lines, resolution=float(df))
 
 
+#: Fewest samples an impulse test may hold [-].
+MIN_IMPULSE_SAMPLES = 16
+
+
+def _positive(name: str, value, unit: str) -> float:
+    """``value`` [unit] as a float, or a ParameterError unless it is a positive, finite number."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (math.isfinite(value) and value > 0):
+        raise ParameterError(f"{name} must be a positive, finite number of {unit}, got {value!r:.60}")
+    return float(value)
+
+
+def _positive_pair(name: str, value, unit: str) -> tuple[float, float]:
+    """Two positive, finite numbers [unit], or a ParameterError."""
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:
+        raise ParameterError(f"{name} must be two positive numbers of {unit}, got {value!r:.60}")
+    first, second = value
+    return _positive(name, first, unit), _positive(name, second, unit)
+
+
 def synthesize_impulse_test(masses=(0.21, 0.05), stiffnesses=(8.0e6, 6.0e6), damping_ratios=(0.02, 0.02),
                             duration: float = 1.0, sample_rate: float = 20e3, pulse: float = 2e-4,
                             force_peak: float = 100.0, noise: float = 0.0, seed: int | None = 0) -> xr.Dataset:
@@ -183,12 +206,14 @@ def synthesize_impulse_test(masses=(0.21, 0.05), stiffnesses=(8.0e6, 6.0e6), dam
     from scipy.linalg import eigh
     from scipy.signal import lsim
 
-    m1, m2 = masses
-    k1, k2 = stiffnesses
-    for name, v in (("mass", m1), ("mass", m2), ("stiffness", k1), ("stiffness", k2), ("duration", duration),
-                    ("sample_rate", sample_rate), ("pulse", pulse)):
-        if not (math.isfinite(v) and v > 0):
-            raise ParameterError(f"{name} must be positive, got {v!r}")
+    m1, m2 = _positive_pair("masses", masses, "kg")
+    k1, k2 = _positive_pair("stiffnesses", stiffnesses, "N/m")
+    duration, sample_rate, pulse, force_peak = (_positive(name, value, unit) for name, value, unit in (
+        ("duration", duration, "s"), ("sample_rate", sample_rate, "Hz"), ("pulse", pulse, "s"),
+        ("force_peak", force_peak, "N")))
+    if duration * sample_rate < MIN_IMPULSE_SAMPLES:
+        raise ParameterError(f"an impulse test of {duration:g} s at {sample_rate:g} Hz holds fewer than "
+                             f"{MIN_IMPULSE_SAMPLES} samples")
     check_noise(noise)
     check_seed(seed)
     from camdyn.simulation import limits  # here: reading a hammer test needs no integrator
@@ -200,7 +225,10 @@ def synthesize_impulse_test(masses=(0.21, 0.05), stiffnesses=(8.0e6, 6.0e6), dam
     stiff = np.array([[k1 + k2, -k2], [-k2, k2]])
     w2, phi = eigh(stiff, mass)                     # mass-normalised: phi^T M phi = I
     omega = np.sqrt(w2)
-    zeta = np.asarray(damping_ratios, float)
+    try:
+        zeta = np.asarray(damping_ratios, float)
+    except (TypeError, ValueError):
+        zeta = np.empty(0)
     if zeta.shape != (2,) or not np.all((zeta >= 0.0) & (zeta < 1.0)):
         raise ParameterError(f"modal damping ratios must lie in [0, 1) (0 undamped, 1 critically damped, where "
                              f"no resonance peak is left to measure), got {damping_ratios!r}")

@@ -273,9 +273,14 @@ def read_measurement(path: str | Path) -> xr.Dataset:
         raise ParameterError(f"read_measurement expects the record's file name (text or a pathlib.Path), got "
                              f"{type(path).__name__} {path!r:.60}")
     path = Path(path)
-    if path.is_dir():
+    try:
+        is_dir, is_file = path.is_dir(), path.is_file()
+    except (OSError, ValueError) as exc:   # a name too long to look up, a NUL byte
+        reason = getattr(exc, "strerror", None) or exc
+        raise DataError(f"{str(path)[:80]!r}: not a usable file name ({reason})") from None
+    if is_dir:
         raise DataError(f"{path} is a folder, not a measurement file")
-    if not path.is_file():
+    if not is_file:
         raise DataError(f"no such file: {path}")
     try:
         head = read_head(path)

@@ -11,6 +11,7 @@ frequency comes from the eigenvalues of the Jacobian of the 2-state system at
 from __future__ import annotations
 
 import math
+import numbers
 import os
 from dataclasses import dataclass
 
@@ -139,6 +140,11 @@ def static_equilibrium(system: System | str, theta0: float | None = None) -> Equ
         If the follower cannot touch the cam, or the cam cannot reach it.
     """
     system = as_system(system)
+    if theta0 is not None and (isinstance(theta0, bool) or not isinstance(theta0, numbers.Real)
+                               or not math.isfinite(theta0)):
+        raise ParameterError(f"theta0 must be a finite cam angle in rad, got {theta0!r}")
+    if theta0 is not None:
+        theta0 = float(theta0)   # a float, as the compiled geometry takes it (an int would compile anew)
     if theta0 is None:
         theta0 = system.motion.initial_angle
     if theta0 is None:

@@ -199,6 +199,15 @@ def preset_text(name: str) -> str:
     return resources.files("camdyn.params.presets").joinpath(f"{name}.toml").read_text()
 
 
+def _exists(path: Path) -> bool:
+    """Whether ``path`` names something; False for a name the system cannot look up
+    (too long, a NUL byte)."""
+    try:
+        return path.exists()
+    except (OSError, ValueError):
+        return False
+
+
 def read_table(source: str | Path) -> tuple[dict, str, str]:
     """Read a preset name or TOML file path; return (dotted values, name, citation)."""
     if str(source) in list_translating_presets():
@@ -212,7 +221,7 @@ def read_table(source: str | Path) -> tuple[dict, str, str]:
     path = Path(str(source))
     if str(source) in list_presets():
         text, name = preset_text(str(source)), str(source)
-    elif path.suffix == ".toml" or path.exists():
+    elif path.suffix == ".toml" or _exists(path):
         if not path.is_file():
             raise PresetError(f"configuration file {str(source)!r} does not exist")
         try:
@@ -314,8 +323,13 @@ def read_system(source: str | Path, overrides: dict | None = None) -> tuple[Syst
     """
     flat, name, citation = read_table(source)
     source = resolve(source)
+    if overrides is not None and not isinstance(overrides, dict):
+        raise ParameterError(f"overrides must be a dict of dotted key -> value with its unit "
+                             f"({{\"cam.runout\": \"3.5 mm\"}}), got {type(overrides).__name__} {overrides!r:.60}")
     overrides = dict(overrides or {})
     for key in overrides:
+        if not isinstance(key, str):
+            raise unknown_key_error(str(key))
         if key not in SCHEMA and not key.startswith("profile."):
             raise unknown_key_error(key)
     if ("cam.semi_major" in overrides or "cam.semi_minor" in overrides) and RADIUS_KEY in flat:

@@ -86,7 +86,12 @@ def parse_quantity(text, unit: str, key: str = "value") -> float:
         Magnitude in ``unit``.
     """
     reg = registry()
-    target = reg.Unit(unit) if unit else reg.Unit("")
+    if not isinstance(unit, str):
+        raise ParameterError(f"{key}: the target unit must be text such as 'm' or 'N*s/m**2.5', got {unit!r}")
+    try:
+        target = reg.Unit(unit) if unit else reg.Unit("")
+    except Exception as exc:  # pint raises several unrelated types here
+        raise UnitError(f"{key}: cannot read the unit {unit!r} ({exc.__class__.__name__})") from None
     q = _quantity(text, key)
     if q.unitless and not target.dimensionless:
         if isinstance(text, (int, float)):

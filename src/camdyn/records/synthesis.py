@@ -9,18 +9,28 @@ import xarray as xr
 
 from camdyn.analysis.kinematics import contact_start
 from camdyn.errors import ParameterError
+from camdyn.model.equilibrium import as_system
 from camdyn.params.system import System
 from camdyn.records.schema import check_noise, check_seed, make_record
-from camdyn.simulation.runner import simulate
+from camdyn.simulation import limits
+from camdyn.simulation.runner import simulate, with_speed
 
 __all__ = ["synthesize", "synthesize_impact_map"]
 
 
-def _check_noise_and_settle(noise: float, settle: float, seed=0) -> None:
+def _checked(system, speed, revolutions: float, noise: float, settle: float, seed=0):
+    """The system at ``speed`` (a System or a preset's name; a speed [Hz] or text with
+    units), and ``revolutions`` and ``settle`` [cam periods] as floats; a ParameterError
+    for a meaningless value, before any work."""
     check_noise(noise)
     check_seed(seed)
+    settle = limits.check_number("settle", settle, "revolutions")
     if not (math.isfinite(settle) and settle >= 0):
         raise ParameterError(f"settle must be a non-negative number of revolutions, got {settle!r}")
+    revolutions = limits.check_number("revolutions", revolutions, "revolutions")
+    if not (math.isfinite(revolutions) and revolutions > 0):
+        raise ParameterError(f"revolutions must be a positive, finite number, got {revolutions!r}")
+    return with_speed(as_system(system), speed), revolutions, settle
 
 
 def synthesize(system: System, speed: float | None = None, revolutions: float = 40.0, sample_rate: float = 20e3,
@@ -60,9 +70,10 @@ def synthesize(system: System, speed: float | None = None, revolutions: float = 
         true forces of the simulation (DC included), attributes ``speed_hz``, ``runout``,
         ``preset`` and ``noise``.
     """
-    _check_noise_and_settle(noise, settle, seed)
-    if speed is not None:
-        system = system.with_values(**{"motion.speed": float(speed)})
+    system, revolutions, settle = _checked(system, speed, revolutions, noise, settle, seed)
+    transducer_angle = limits.check_number("transducer_angle", transducer_angle, "rad")
+    if isinstance(channels, str) or not all(isinstance(name, str) for name in np.atleast_1d(channels)):
+        raise ParameterError(f"channels must be a sequence of names from Nx, Ny, alpha_ddot, a_t, got {channels!r}")
     ds = simulate(system, revolutions=settle + revolutions, sample_rate=sample_rate,
                   initial_state=contact_start(system))
     period = system.motion.period
@@ -111,11 +122,12 @@ def synthesize_impact_map(system: System, speed: float | None = None, revolution
     """
     from camdyn.simulation.impact_map import simulate_impact_map
 
-    _check_noise_and_settle(noise, settle, seed)
-    if speed is not None:
-        system = system.with_values(**{"motion.speed": float(speed)})
+    system, revolutions, settle = _checked(system, speed, revolutions, noise, settle, seed)
     if not (isinstance(pulse_samples, (int, np.integer)) and pulse_samples >= 2):
         raise ParameterError(f"pulse_samples must be an integer of at least 2, got {pulse_samples!r}")
+    sample_rate = limits.check_number("sample_rate", sample_rate, "Hz")
+    if not (math.isfinite(sample_rate) and sample_rate > 0):
+        raise ParameterError(f"sample_rate must be a positive, finite number of Hz, got {sample_rate!r}")
     tau = 1.0 / sample_rate
     ds = simulate_impact_map(system, revolutions=settle + revolutions, gamma=gamma, sample_rate=sample_rate,
                              pulse_duration=pulse_samples * tau)

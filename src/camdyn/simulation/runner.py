@@ -219,7 +219,7 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
                               atol=atol, initial_state=initial_state, max_step=max_step, max_steps=max_steps)
     limits.check_system(system)
     system = with_speed(system, speed)
-    if method not in METHODS:
+    if not isinstance(method, str) or method not in METHODS:
         raise ParameterError(f"method must be one of {sorted(METHODS)}, got {method!r}")
     limits.check_tolerances(rtol, atol)
     wanted = check_variables(variables)
@@ -275,7 +275,14 @@ def starting_state(prep: Prepared, initial_state=None) -> np.ndarray:
     ``(alpha [rad], alpha_dot [rad/s])`` in its place (refused unless finite)."""
     y0 = prep.y0.copy()
     if initial_state is not None:
-        y0[0], y0[1] = float(initial_state[0]), float(initial_state[1])
+        try:
+            given = np.asarray(initial_state, dtype=float)
+        except (TypeError, ValueError):
+            given = np.empty(0)
+        if given.shape != (2,) or isinstance(initial_state, (str, bytes)):
+            raise ParameterError(f"initial_state must be two numbers (alpha [rad], alpha_dot [rad/s]), "
+                                 f"got {initial_state!r:.60}")
+        y0[0], y0[1] = float(given[0]), float(given[1])
         if not np.all(np.isfinite(y0)):
             raise ParameterError("initial_state must be finite")
     return y0
@@ -302,6 +309,8 @@ def check_variables(variables) -> frozenset:
         return frozenset(VARIABLES)
     if isinstance(variables, str):
         raise ParameterError(f"variables must be a list of names, got the string {variables!r}")
+    if not isinstance(variables, (list, tuple, set, frozenset)):
+        raise ParameterError(f"variables must be a list of names, got {type(variables).__name__} {variables!r:.60}")
     names = list(variables)
     unknown = [name for name in names if name not in VARIABLES]
     if unknown:

@@ -253,7 +253,7 @@ def _executor(workers: int, dask: str | None, threads: int, point):
 def check_dask_address(dask: str | None) -> None:
     """Refuse a ``dask`` setting that is neither ``"local"`` nor a scheduler address
     ``PROTOCOL://HOST:PORT`` (tcp, tls, ucx, ws, wss or inproc)."""
-    if dask is None or dask == "local":
+    if dask is None or (isinstance(dask, str) and dask == "local"):
         return
     if not (isinstance(dask, str) and re.fullmatch(r"(tcp|tls|ucx|ws|wss)://[\w.\-\[\]:]+:\d+|inproc://\S+", dask)):
         raise ParameterError(f"--dask must be 'local' or a scheduler address such as tcp://10.0.0.5:8786, "

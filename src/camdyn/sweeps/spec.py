@@ -315,6 +315,9 @@ def _display_unit(convert, raw, si_unit: str) -> tuple[str, float]:
 def spec_from_dict(spec: dict, base_dir: Path | None = None, name: str = "sweep") -> SweepSpec:
     """Validate a sweep given as nested dicts (the TOML's tables); see the module docstring."""
     base_dir = Path(base_dir or ".")
+    if not isinstance(spec, dict):
+        raise ParameterError(f"sweep spec: expected a dict of tables (as the TOML file's), got "
+                             f"{type(spec).__name__} {spec!r:.60}")
     extra = set(spec) - _TABLES
     if extra:
         raise ParameterError(f"sweep spec: unknown table(s) {sorted(extra)}; allowed: {sorted(_TABLES)}")
