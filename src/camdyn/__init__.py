@@ -35,7 +35,16 @@ _PARAMETERS = ("Cam", "Contact", "Follower", "Friction", "Motion", "Spring", "Sy
 
 def __getattr__(name):
     # lazy: importing camdyn (or a compiled submodule, as a sweep's worker process does)
-    # neither compiles anything nor imports pint, xarray or SciPy
+    # neither compiles anything nor imports pint, xarray or SciPy; a Ctrl-C during the
+    # import of a name waits for its end (camdyn.interrupts): a half-done import of numba
+    # would break every later call
+    from camdyn.interrupts import deferred
+
+    with deferred():
+        return _load(name)
+
+
+def _load(name):
     if name == "load_system":
         from camdyn.io.system_config import load_system
         return load_system

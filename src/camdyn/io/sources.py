@@ -142,7 +142,10 @@ def simulate(system, speed=None, revolutions: float = 30.0, *args, **options) ->
         The run over ``time`` with units on every variable, its cam speed in the
         attribute ``speed_hz`` [Hz].
     """
-    from camdyn.simulation.runner import simulate as run
+    from camdyn.interrupts import deferred
+
+    with deferred():   # the first call imports numba and the integrator: not to be cut in half
+        from camdyn.simulation.runner import simulate as run
 
     if isinstance(system, (str, os.PathLike)):
         if family_of(system) == "cam-follower":

@@ -15,10 +15,13 @@ __all__ = [*_SPEC, "run_sweep", "compute_chunk", "default_workers"]
 
 
 def __getattr__(name):
-    if name in _EXECUTION:
-        from camdyn.sweeps import execution
-        return getattr(execution, name)
-    if name in _SPEC:
-        from camdyn.sweeps import spec
-        return getattr(spec, name)
+    from camdyn.interrupts import deferred
+
+    with deferred():   # a Ctrl-C waits for the import's end (camdyn.interrupts)
+        if name in _EXECUTION:
+            from camdyn.sweeps import execution
+            return getattr(execution, name)
+        if name in _SPEC:
+            from camdyn.sweeps import spec
+            return getattr(spec, name)
     raise AttributeError(name)
