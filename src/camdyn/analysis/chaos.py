@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from camdyn.analysis.lyapunov import check_periods, count
+from camdyn.analysis.lyapunov import LyapunovSpectrum, check_periods, count, standard_error
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.integrator import driver
 from camdyn.model.equilibrium import as_system
@@ -36,7 +36,7 @@ from camdyn.simulation import limits
 from camdyn.simulation.limits import SCAN_FRACTION, STEP_FRACTION
 from camdyn.systems import registry as systems
 
-__all__ = ["LyapunovResult", "lyapunov_exponent"]
+__all__ = ["LyapunovResult", "lyapunov_exponent", "agreement", "START_ALLOWANCE"]
 
 
 @numba.njit(cache=True)
@@ -100,6 +100,10 @@ class LyapunovResult:
         Cam speed [Hz].
     revolutions, transient : int
         Periods averaged, and discarded first [-].
+    error : float
+        Standard error of ``exponent`` [1/s]
+        (:func:`camdyn.analysis.lyapunov.standard_error`, from the per-period
+        ``ln(d_k / d0)``): its statistical uncertainty over ``revolutions``.
     """
 
     exponent: float
@@ -108,6 +112,7 @@ class LyapunovResult:
     speed: float
     revolutions: int
     transient: int
+    error: float = math.nan
 
 
 def lyapunov_exponent(system: System, speed: float | None = None, revolutions: int = 400, transient: int = 200,
@@ -156,4 +161,42 @@ def lyapunov_exponent(system: System, speed: float | None = None, revolutions: i
                               f"{driver.STATUS_MESSAGES[int(status)]}")
     running = np.cumsum(logs) / (np.arange(1, revolutions + 1) * period)
     return LyapunovResult(exponent=float(running[-1]), per_revolution=float(running[-1] * period),
-                          running=running, speed=system.motion.speed, revolutions=revolutions, transient=transient)
+                          running=running, speed=system.motion.speed, revolutions=revolutions, transient=transient,
+                          error=standard_error(logs, period))
+
+
+#: Bias of a finite-time exponent from its start [-, times 1 / (N T)]: the first gap's
+#: (or tangent vector's) share ``c`` of the slowest-decaying direction adds
+#: ``ln|c| / (N T)``; ``|ln c| <= ln 10`` is allowed for each estimate.
+START_ALLOWANCE = math.log(10.0)
+
+
+def agreement(two: LyapunovResult, spectrum: LyapunovSpectrum) -> tuple[bool, str]:
+    """Whether the largest exponent of two trajectories (``two``) and of the variational
+    spectrum (``spectrum``) agree, and a sentence that says so or why not.
+
+    They agree when they differ by at most twice their combined standard error plus
+    each one's start allowance :data:`START_ALLOWANCE` / (N T). The two follow different
+    trajectories: the spectrum's run controls the error of the matrix too, at its own
+    tolerance, so on a chaotic attractor its orbit parts from the two-trajectory run's
+    within a few revolutions, and each is the average of a different finite stretch of
+    the attractor, whose growth per revolution scatters widely. Both carry the saltation
+    of every impact (the two trajectories through their own events, the tangent vectors
+    by the saltation matrices).
+    """
+    period = 1.0 / two.speed
+    difference = two.exponent - spectrum.largest
+    combined = math.hypot(two.error, spectrum.errors[0]) if spectrum.errors.size else math.nan
+    start = START_ALLOWANCE * (1.0 / (two.revolutions * period) + 1.0 / (spectrum.periods * period))
+    allowed = 2.0 * combined + start
+    numbers = (f"{two.exponent:.4g} and {spectrum.largest:.4g} 1/s differ by {abs(difference):.3g} 1/s; "
+               f"allowed {allowed:.3g} (twice the combined standard error {combined:.3g}, plus {start:.3g} for "
+               f"the starts)")
+    if math.isfinite(allowed) and abs(difference) <= allowed:
+        return True, (f"the two largest exponents agree within their uncertainty: {numbers}. They average different "
+                      f"stretches of the motion (the two runs part within a few revolutions on a chaotic "
+                      f"attractor), so they agree only to within that uncertainty; more revolutions narrow it")
+    return False, (f"the two largest exponents do not agree within their uncertainty: {numbers}. The two runs "
+                   f"follow different trajectories: the motion may not have settled within the transient, or "
+                   f"may switch between coexisting motions (the runs can end on different ones); try a longer "
+                   f"--transient and more --revolutions")

@@ -45,7 +45,29 @@ from camdyn.params.system import System
 from camdyn.simulation import limits
 from camdyn.systems import registry as systems
 
-__all__ = ["LyapunovSpectrum", "model_spectrum", "lyapunov_spectrum", "check_periods", "count", "MAX_PERIODS"]
+__all__ = ["LyapunovSpectrum", "model_spectrum", "lyapunov_spectrum", "check_periods", "count", "MAX_PERIODS",
+           "standard_error", "BATCHES"]
+
+#: Batches of the per-period growth whose means give an estimate's standard error [-].
+BATCHES = 20
+
+
+def standard_error(logs, period: float) -> float:
+    """Standard error [1/s] of the mean of the per-period log growths ``logs`` [-]
+    divided by ``period`` [s], by batch means: the ``N`` periods in :data:`BATCHES`
+    consecutive batches (fewer for ``N < 2 BATCHES``: two periods a batch), the
+    standard deviation of the batch means over the square root of their number. The
+    batches, many periods long, carry the correlation between neighbouring periods
+    that a per-period standard deviation would miss. It is the statistical spread of
+    the finite-time average only; the start's bias (the initial direction's share of
+    the slowest-decaying one), of order ``1 / (N T)``, is not in it. NaN for fewer than
+    4 periods or a growth of -inf (a direction erased)."""
+    logs = np.asarray(logs, dtype=float)
+    if logs.size < 4 or not np.all(np.isfinite(logs)):
+        return math.nan
+    means = [batch.mean() for batch in np.array_split(logs, min(BATCHES, logs.size // 2))]
+    return float(np.std(means, ddof=1) / math.sqrt(len(means)) / period)
+
 
 #: Accepted steps allowed per interval [-], and events logged per interval [-].
 MAX_STEPS = 50_000_000
@@ -77,6 +99,9 @@ class LyapunovSpectrum:
         component].
     speed : float
         Cam speed [Hz] (NaN for a test model).
+    errors : ndarray (n,)
+        Standard error of each exponent [1/s] (:func:`standard_error`, from the
+        per-period ``ln |R_k[i, i]|``): its statistical uncertainty over ``periods``.
     """
 
     exponents: np.ndarray
@@ -88,6 +113,7 @@ class LyapunovSpectrum:
     events: int
     weights: np.ndarray
     speed: float = math.nan
+    errors: np.ndarray = dataclasses.field(default_factory=lambda: np.full(0, math.nan))
 
     @property
     def total(self) -> float:
@@ -233,8 +259,10 @@ def model_spectrum(system_id: int, p, y0, period: float, periods: int = 400, tra
         if progress:
             progress(transient + k + 1, transient + periods)
     running = np.cumsum(logs, axis=0) / (np.arange(1, periods + 1)[:, None] * period)
+    errors = np.array([standard_error(logs[:, i], period) for i in range(n)])
     return LyapunovSpectrum(exponents=running[-1].copy(), per_period=running[-1] * period, running=running,
-                            period=period, periods=periods, transient=transient, events=events, weights=weights)
+                            period=period, periods=periods, transient=transient, events=events, weights=weights,
+                            errors=errors)
 
 
 def lyapunov_spectrum(system: System, speed: float | None = None, revolutions: int = 400, transient: int = 200,

@@ -138,8 +138,9 @@ def lyapunov(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              json_: bool = JsonOption):
     """Largest Lyapunov exponent of the steady motion at one speed (two nearby trajectories
     through every impact, renormalised once per revolution); with --spectrum also the
-    whole spectrum from the state-transition matrix, re-orthonormalised once per revolution."""
-    from camdyn.analysis.chaos import lyapunov_exponent
+    whole spectrum from the state-transition matrix, re-orthonormalised once per revolution,
+    and whether the two largest exponents agree within their standard errors."""
+    from camdyn.analysis.chaos import agreement, lyapunov_exponent
     from camdyn.cli.common import load_source
     from camdyn.params.units import parse_speed
 
@@ -151,24 +152,29 @@ def lyapunov(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     if spectrum:
         from camdyn.analysis.lyapunov import lyapunov_spectrum
         full = lyapunov_spectrum(system, speed=hz, revolutions=revolutions, transient=transient)
+    agree, verdict_text = agreement(result, full) if full is not None else (None, "")
     if json_:
         summary = {"speed_hz": result.speed, "exponent_per_s": result.exponent,
+                   "exponent_error_per_s": result.error,
                    "per_revolution": result.per_revolution, "chaotic": bool(result.exponent > 0)}
         details = {}
         if full is not None:
             summary.update(spectrum_per_s=[float(x) for x in full.exponents],
+                           spectrum_error_per_s=[float(x) for x in full.errors],
                            spectrum_per_revolution=[float(x) for x in full.per_period],
-                           spectrum_sum_per_s=full.total)
-            details = {"kaplan_yorke_dimension": full.kaplan_yorke_dimension, "spectrum_events": full.events}
+                           spectrum_sum_per_s=full.total, estimates_agree=agree)
+            details = {"kaplan_yorke_dimension": full.kaplan_yorke_dimension, "spectrum_events": full.events,
+                       "agreement": verdict_text}
         emit_json("lyapunov", summary, exponent_half_record_per_s=float(half), revolutions=revolutions,
                   transient=transient, **details)
         return
     verdict = "chaotic" if result.exponent > 0 else "not chaotic (attracting)"
-    console.print(f"largest Lyapunov exponent at {result.speed:g} Hz: {result.exponent:.4g} 1/s "
-                  f"({result.per_revolution:.4g} per revolution; {float(half):.4g} 1/s over the first half): "
-                  f"{verdict}", highlight=False, soft_wrap=True)
+    console.print(f"largest Lyapunov exponent at {result.speed:g} Hz: {result.exponent:.4g} +- {result.error:.2g} "
+                  f"1/s (standard error; {result.per_revolution:.4g} per revolution; {float(half):.4g} 1/s over the "
+                  f"first half): {verdict}", highlight=False, soft_wrap=True)
     if full is not None:
-        values = ", ".join(f"{x:.4g}" for x in full.exponents)
+        values = ", ".join(f"{x:.4g} +- {e:.2g}" for x, e in zip(full.exponents, full.errors))
         console.print(f"Lyapunov spectrum (variational equations with saltation): {values} 1/s; sum "
                       f"{full.total:.4g} 1/s; Kaplan-Yorke dimension {full.kaplan_yorke_dimension:.3g}",
                       highlight=False, soft_wrap=True)
+        console.print(verdict_text, highlight=False, soft_wrap=True)
