@@ -465,3 +465,22 @@ def test_another_familys_configuration_is_named_not_taken_for_a_typo(path, words
     with pytest.raises(ParameterError, match="not the rocking flat-faced follower") as caught:
         camdyn.load_system(str(root / path))
     assert words in str(caught.value) and "did you mean" not in str(caught.value)
+
+
+def test_a_record_named_txt_is_written_as_csv_text_and_says_so(tmp_path, capsys):
+    # .txt is read as CSV (camdyn.io.measurements), so it may name a record; the command
+    # says which format it wrote, and a suffix of no record format is refused
+    from camdyn.cli.app import main
+    from camdyn.io.measurements import read_measurement
+
+    out = tmp_path / "y11.txt"
+    capsys.readouterr()
+    assert main(["synthesize-impulse", "--duration", "0.05", "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert said.startswith(f"wrote {out} (") and ") as CSV text: modes at" in said, said
+    assert out.read_text().lstrip().startswith(("#", "time"))          # text, not HDF5 or UFF
+    assert set(read_measurement(out).data_vars) >= {"force", "acceleration"}
+    refused = tmp_path / "y11.dat"
+    _one_error_line(*_cli(capsys, "synthesize-impulse", "--duration", "0.05", "--out", refused),
+                    "a record is .csv (or .txt, written as CSV text)")
+    assert not refused.exists()

@@ -72,7 +72,8 @@ def check_outputs(netcdf: Path | None = None, figure: Path | None = None, record
         from camdyn.io.measurements import RECORD_SUFFIXES
 
         if Path(record).suffix.lower() not in RECORD_SUFFIXES:
-            raise OutputError(f"cannot write {record}: a record is .csv, .nc/.h5 or .uff/.unv")
+            raise OutputError(f"cannot write {record}: a record is .csv (or .txt, written as CSV text), .nc/.h5 "
+                              f"or .uff/.unv")
         checks.append((Path(record), None))
     checks += [(Path(p), None) for p in [json_file, *others] if p is not None]
     refuse_inputs_as_outputs(path for path, _ in checks)

@@ -58,8 +58,8 @@ def synthesize(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         rec = make(system, parse_speed(speed) if speed else None, revolutions=revolutions, sample_rate=rate,
                    noise=noise, settle=settle, seed=seed, channels=tuple(c.strip() for c in channels.split(",")))
     path = write_measurement(rec, out)
-    announce(path, detail=f": {rec.sizes['time']} samples at {rate:g} Hz, {revolutions:g} revolutions at "
-                          f"{rec.attrs['speed_hz']:g} Hz, noise {noise:g}")
+    announce(path, detail=f"{_format_note(out)}: {rec.sizes['time']} samples at {rate:g} Hz, {revolutions:g} "
+                          f"revolutions at {rec.attrs['speed_hz']:g} Hz, noise {noise:g}")
 
 
 def synthesize_impulse(damping: float = typer.Option(0.02, help="Damping ratio of the lower mode [-]."),
@@ -77,7 +77,15 @@ def synthesize_impulse(damping: float = typer.Option(0.02, help="Damping ratio o
                                   sample_rate=parse_hertz(sample_rate), noise=noise)
     write_measurement(rec, out)
     fn = ", ".join(f"{f:.1f}" for f in rec.attrs["natural_frequencies"])
-    announce(out, detail=f": modes at {fn} Hz, lower-mode damping {100 * damping:g} %")
+    announce(out, detail=f"{_format_note(out)}: modes at {fn} Hz, lower-mode damping {100 * damping:g} %")
+
+
+def _format_note(out: Path) -> str:
+    """`` as CSV text`` for a record whose suffix does not name its format (``.txt``),
+    else nothing: ``--out y11.txt`` writes CSV, and says so."""
+    from camdyn.io.measurements import record_format
+
+    return f" as {record_format(out)}" if Path(out).suffix.lower() == ".txt" else ""
 
 
 #: Keys of the friction estimate that are details, not headline numbers (JSON).

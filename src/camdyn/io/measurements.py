@@ -78,7 +78,7 @@ from camdyn.records.schema import (
 )
 
 __all__ = ["CHANNEL_UNITS", "RECORD_SUFFIXES", "read_measurement", "write_measurement", "check_record",
-           "make_record", "angular_acceleration"]
+           "make_record", "angular_acceleration", "record_format"]
 
 #: File suffixes of the record formats (CSV, netCDF/HDF5, UFF 58).
 RECORD_SUFFIXES = {".csv", ".txt", ".nc", ".h5", ".hdf5", ".nc4", ".uff", ".unv"}
@@ -87,6 +87,16 @@ _FORMATS = {".csv": "csv", ".txt": "csv", ".nc": "netcdf", ".h5": "netcdf", ".hd
             ".uff": "uff", ".unv": "uff"}
 _FORMAT_KINDS = {"csv": {"text"}, "netcdf": {"hdf5", "netcdf3"}, "uff": {"uff"}}
 _FORMAT_NAMES = {"csv": "CSV text", "netcdf": "a netCDF/HDF5 file", "uff": "a UFF file"}
+
+
+def record_format(path: str | Path) -> str:
+    """The format a record named ``path`` is written in, by its suffix: ``"CSV text"``,
+    ``"a netCDF/HDF5 file"`` or ``"a UFF file"`` (a suffix of none: a DataError)."""
+    family = _FORMATS.get(Path(path).suffix.lower())
+    if family is None:
+        raise DataError(f"{path}: unknown record format {Path(path).suffix or '(no suffix)'!r} (use .csv, "
+                        f".nc/.h5 or .uff)")
+    return _FORMAT_NAMES[family]
 _RENAME = {"hdf5": "; rename it to .nc", "netcdf3": "; rename it to .nc", "uff": "; rename it to .uff",
            "text": "; if it is a CSV record, rename it to .csv",
            "zip": "; export the sheet as CSV (comma-separated, UTF-8)",
