@@ -136,7 +136,7 @@ def test_tribology_and_lyapunov_json_schemas(tmp_path):
     status, out, _ = run("lyapunov", *IMPACT, "--revolutions", "10", "--transient", "4", "--json")
     doc = json.loads(out)
     assert status == 0 and list(doc)[:2] == ["schema", "summary"] and doc["schema"] == "camdyn.lyapunov/1"
-    assert {"speed_hz", "exponent_per_s", "per_revolution", "chaotic"} == set(doc["summary"])
+    assert {"speed_hz", "exponent_per_s", "exponent_error_per_s", "per_revolution", "chaotic"} == set(doc["summary"])
 
 
 SPEC = """
