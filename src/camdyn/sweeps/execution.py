@@ -52,13 +52,13 @@ from camdyn.integrator import driver
 from camdyn.model.layout import SIZE
 from camdyn.simulation.runner import penetration_resolution, prepare
 from camdyn.sweeps import families, worker
+from camdyn.sweeps.families import STATUS_OK, STATUS_REFUSED, STATUS_SOLVER
 from camdyn.sweeps.spec import SweepSpec
 from camdyn.sweeps.store import Checkpoint
 
 __all__ = ["check_dask_address", "quiet_resource_tracker", "compute_chunk", "prepare_chunk", "run_sweep",
            "default_workers", "QUIET_DASK"]
 
-STATUS_OK, STATUS_REFUSED, STATUS_SOLVER = 0, 1, 2
 MAX_STEPS_PER_REVOLUTION = 200_000
 
 #: Dask settings for the LocalCluster of ``dask="local"`` (and this process's client):

@@ -23,6 +23,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
+
 from camdyn.errors import CamdynError, ParameterError
 from camdyn.params.config import (
     SCHEMA,
@@ -33,8 +35,12 @@ from camdyn.params.config import (
     unknown_key_error,
 )
 
-__all__ = ["Family", "ROCKING_METRICS", "chunk_task", "family_of", "metric_definitions", "result_variables"]
+__all__ = ["Family", "ROCKING_METRICS", "STATUS_OK", "STATUS_REFUSED", "STATUS_SOLVER", "chunk_task", "family_of",
+           "finish", "metric_definitions", "result_variables"]
 
+#: A point's status: run, refused before the run (its values make no model), or stopped
+#: by the solver.
+STATUS_OK, STATUS_REFUSED, STATUS_SOLVER = 0, 1, 2
 #: metric name -> what it adds to the result of a sweep over the rocking cam-follower
 ROCKING_METRICS = {
     "residual": "rms and peak-to-peak of the residual response alpha - alpha_rigid [rad]",
@@ -170,3 +176,17 @@ def chunk_task(spec, chunk: int):
         return None
     prepared = runner.prepare_chunk(spec, chunk)
     return runner.run_chunk, runner.run_args(spec, prepared), prepared, runner.finish
+
+
+def finish(prepared: dict, result: dict) -> dict:
+    """Merge a worker's result with the chunk's preparation: status and failure reason."""
+    status = prepared["status"].copy()
+    failure = list(prepared["failure"])
+    solver = result.pop("solver_failure")
+    for i in range(status.size):
+        if status[i] == STATUS_OK and solver[i]:
+            status[i] = STATUS_SOLVER
+            failure[i] = str(solver[i])
+    result["status"] = status
+    result["failure"] = np.array(failure, dtype=str)
+    return result

@@ -13,11 +13,11 @@ import numpy as np
 
 from camdyn.errors import CamdynError
 from camdyn.sweeps import mechanism_metrics as MM
+from camdyn.sweeps.families import STATUS_OK, STATUS_REFUSED, STATUS_SOLVER, finish
 
 __all__ = ["STATUS_OK", "STATUS_REFUSED", "STATUS_SOLVER", "prepare_chunk", "run_args", "run_chunk", "finish",
            "sample_rate", "variables", "definitions"]
 
-STATUS_OK, STATUS_REFUSED, STATUS_SOLVER = 0, 1, 2
 
 
 def sample_rate(mechanism, samples: int) -> float:
@@ -102,18 +102,6 @@ def run_chunk(mechanisms: list, run: tuple, kind: str, metrics) -> dict:
     return out
 
 
-def finish(prepared: dict, result: dict) -> dict:
-    """Merge a worker's result with the chunk's preparation: status and failure reason."""
-    status = prepared["status"].copy()
-    failure = list(prepared["failure"])
-    solver = result.pop("solver_failure")
-    for i in range(status.size):
-        if status[i] == STATUS_OK and solver[i]:
-            status[i] = STATUS_SOLVER
-            failure[i] = str(solver[i])
-    result["status"] = status
-    result["failure"] = np.array(failure, dtype=str)
-    return result
 
 
 def variables(spec) -> dict:

@@ -22,13 +22,13 @@ from pathlib import Path
 import numpy as np
 
 from camdyn.errors import CamdynError, ParameterError, UnknownKeyError
+from camdyn.sweeps.families import STATUS_OK, STATUS_REFUSED, STATUS_SOLVER, finish
 from camdyn.sweeps.metrics import poincare_period
 
 __all__ = ["METRICS", "RUN_DEFAULTS", "STATUS_OK", "STATUS_REFUSED", "STATUS_SOLVER", "absolute_source",
            "base_text", "check_values", "definitions", "finish", "key_unit", "prepare_chunk", "run_args",
            "run_chunk", "variables"]
 
-STATUS_OK, STATUS_REFUSED, STATUS_SOLVER = 0, 1, 2
 
 #: metric name -> what it adds to the result of a sweep over a protocol model
 METRICS = {
@@ -215,18 +215,6 @@ def _point_metrics(model, ds, metrics, discard: int, kept: int, samples: int) ->
     return row
 
 
-def finish(prepared: dict, result: dict) -> dict:
-    """Merge a worker's result with the chunk's preparation: status and failure reason."""
-    status = prepared["status"].copy()
-    failure = list(prepared["failure"])
-    solver = result.pop("solver_failure")
-    for i in range(status.size):
-        if status[i] == STATUS_OK and solver[i]:
-            status[i] = STATUS_SOLVER
-            failure[i] = str(solver[i])
-    result["status"] = status
-    result["failure"] = np.array(failure, dtype=str)
-    return result
 
 
 def _variables(model, metrics, kept: int) -> dict:
