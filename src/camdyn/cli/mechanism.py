@@ -60,11 +60,11 @@ def mechanism_summary(ds) -> dict:
                    bearing_force_max_N=float(force.max()),
                    pivot_displacement_max_m=float(np.hypot(ds["u"].values, ds["v"].values).max()),
                    Fn_max_N=float(ds["Fn"].max()))
-    out.update(_common(ds, kind, out["revolutions"]))
+    out.update(_common(ds, out["revolutions"]))
     return out
 
 
-def _common(ds, kind: str, revolutions: float) -> dict:
+def _common(ds, revolutions: float) -> dict:
     """The keys every kind's ``camdyn simulate`` summary shares (docs/cli-json.md):
     ``speed_hz`` [Hz] (a driven shaft's mean cam speed), ``contact_fraction`` (of the
     samples; two followers: the mean of theirs), the landings seen in the samples and
