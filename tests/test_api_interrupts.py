@@ -60,16 +60,17 @@ SWEEP = PREAMBLE.format(
                            "metrics": {"names": ["impacts"]}, "output": {"path": "inline.nc"}})""",
     call="run_sweep(spec, workers=0, progress=False, restart=True)")
 
-#: A fresh process interrupted anywhere from its imports to inside its first simulation
-#: (about 25 s long: every interrupt lands in start-up).
+#: A fresh process interrupted anywhere from its imports to inside its simulations: it
+#: simulates until it is interrupted, so that the interrupt lands in the run however fast
+#: the machine (a warm cache makes the first simulation take well under a second).
 START_UP = """
 import sys
 print("alive", flush=True)
 try:
     import camdyn
     rig = camdyn.load_system("sundar2014-impact")
-    camdyn.simulate(rig, speed=16.0, revolutions=2000, sample_rate=1000.0, variables=["alpha"])
-    print("finished", flush=True)
+    while True:
+        camdyn.simulate(rig, speed=16.0, revolutions=2000, sample_rate=1000.0, variables=["alpha"])
 except KeyboardInterrupt as exc:
     print("caught", type(exc).__name__, flush=True)
 """
