@@ -6,9 +6,8 @@ The tries run inside a few long-lived Python processes that loop: each try calls
 afresh, the test sends SIGINT after a seeded random delay, and the process reports
 ``caught`` from its ``except KeyboardInterrupt``. Fresh processes are also interrupted
 during ``import camdyn``, the first ``load_system`` and the loading of the compiled
-integrator from numba's cache. A Jupyter kernel's interrupt (``jupyter_client``) is not
-tried: jupyter_client and ipykernel are not among the test dependencies; a kernel's
-interrupt is the same SIGINT to the same interpreter.
+integrator from numba's cache. A Jupyter kernel's interrupt is tried in
+``test_jupyter_interrupt.py``.
 """
 
 from __future__ import annotations
