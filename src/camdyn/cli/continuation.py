@@ -57,18 +57,28 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                     plot: Optional[Path] = typer.Option(None, help="Figure of the branch (.png, .pdf, ...)."),
                     out: Optional[Path] = typer.Option(None, help="Result file (.nc)."),
                     force: bool = ForceOption,
+                    cover: bool = typer.Option(True, "--cover/--no-cover",
+                                               help="Where a branch ends inside the range, restart past its end "
+                                                    "from the orbit a short simulation settles on, and report "
+                                                    "each gap left."),
+                    max_time: Optional[str] = typer.Option(None, "--max-time",
+                                                           help="Start no new branch after this wall-clock "
+                                                                "time, e.g. 10min (default: no limit)."),
                     quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
                     json_: bool = JsonOption):
     """Continue periodic orbits over a parameter range: stability from the Floquet
     multipliers; folds, period doublings, Neimark-Sacker bifurcations, grazing, loss of
     contact and sliding reversal located on the way; the period-doubled branches
-    followed (docs/continuation.md). A translating follower (the preset alzate) is
+    followed (docs/continuation.md). Where a branch ends inside the range, the
+    continuation restarts past its end and says which gaps it left (--no-cover: one
+    branch). A translating follower (the preset alzate) is
     continued in motion.speed, its orbits taken at cam angle 0. A mechanism file (the
     flexible pivot, or two followers with drive.kind = 'prescribed') is continued in a
     system key or, for the flexible pivot, pivot.stiffness or pivot.damping; a cam under
     its drive (its orbits on the section at its starting angle, their period unknown) in
     a drive key (drive.free_speed, drive.shaft_inertia, ...) or the cam's or followers'."""
-    from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset, switch_doublings
+    from camdyn.continuation.coverage import coverage_summary, covered_branches, gap_records
+    from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset
 
     check_outputs(netcdf=out, figure=plot, force=force)
     from camdyn.params.profiles import is_translating
@@ -81,31 +91,25 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                                  "single shooting")
         from camdyn.cli.translating import continue_translating_command
         continue_translating_command(source, set_, parameter or "motion.speed", start, stop, period, step, max_points,
-                                     transient, doublings, brute_force, plot, out, quiet, json_)
+                                     transient, doublings, brute_force, plot, out, quiet, json_, cover,
+                                     _max_time(max_time))
         return
+    limit = _max_time(max_time)
     system, parameter, unit, trace = _load(source, set_, parameter, brute_force)
     first, last = _value(start, "--from", unit, parameter), _value(stop, "--to", unit, parameter)
     if first == last:
         raise ParameterError("--from and --to must differ")
-    from camdyn.continuation.branches import MIN_STEP
-
-    if period < 1 or max_points < 2 or transient < 1 or not step >= MIN_STEP:
-        raise ParameterError(f"--period and --transient must be at least 1, --max-points at least 2, --step at "
-                             f"least {MIN_STEP:g}")
-    if doublings < 0 or brute_force < 0 or brute_force == 1:
-        raise ParameterError("--doublings must be at least 0, --brute-force 0 or at least 2")
-    if brute_force and plot is None:
-        raise ParameterError("--brute-force draws the diagram under the branches of --plot: give --plot")
+    _check_settings(period, max_points, transient, step, doublings, brute_force, plot)
     bar = _Bar(quiet or (json_ and not err_console.is_terminal), parameter, unit, first, last,
                max_points * (1 + doublings))
     with bar:
         bar.phase(f"the first orbit ({transient} periods of transient, then Newton's method)")
         problem, branch = trace(system, parameter, first, last, period, step, max_points, transient,
                                 progress=bar.orbit, segments=segments)
-        bar.phase(f"the period-{2 * period} branches" if doublings else "")
-        branches = [branch, *switch_doublings(problem, branch, last, doublings, step, max_points,
-                                              progress=bar.orbit)]
+        coverage, branches = covered_branches(problem, branch, first, last, step, max_points, transient, doublings,
+                                              cover, limit, progress=bar.orbit, phase=bar.phase, segments=segments)
     records = [branch_records(problem, b) for b in branches]
+    gaps = gap_records(coverage)
     bifurcations = bifurcation_records(branches)
     files = []
     if out is not None:
@@ -117,21 +121,54 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         files.append(announce(plot_branches(branches_dataset(problem, records, bifurcations), plot, diagram),
                               json_))
     if json_:
-        summary = {"parameter": parameter, "units": unit, "points": len(branch.orbits),
-                   "stable_points": sum(o.stable for o in branch.orbits), "bifurcation_count": len(bifurcations),
-                   "stopped": branch.stopped, "branch_count": len(branches)}
-        emit_json("continue", summary, branches=records, bifurcations=bifurcations, files=files)
+        summary = {"parameter": parameter, "units": unit, **coverage_summary(coverage, branches),
+                   "bifurcation_count": len(bifurcations)}
+        emit_json("continue", summary, branches=records, bifurcations=bifurcations, gaps=gaps, files=files)
         return
-    stable = sum(o.stable for o in branch.orbits)
-    console.print(f"{len(branch.orbits)} orbits of period {period} over {parameter} = {branch.orbits[0].parameter:.6g}"
-                  f" to {branch.orbits[-1].parameter:.6g} {unit}, {stable} stable; {branch.stopped}",
-                  highlight=False, soft_wrap=True)
-    for extra in branches[1:]:
-        console.print(f"{len(extra.orbits)} orbits of period {extra.orbits[0].periods} from {parameter} = "
-                      f"{extra.orbits[0].parameter:.9g} {unit}; {extra.stopped}", highlight=False, soft_wrap=True)
+    _print_branches(parameter, unit, branches, bifurcations, gaps)
+
+
+def _print_branches(parameter: str, unit: str, branches, bifurcations: list[dict], gaps: list[dict]) -> None:
+    """The branches, their bifurcations and the gaps between them, one line each."""
+    for index, b in enumerate(branches):
+        values = [o.parameter for o in b.orbits]
+        console.print(f"branch {index}: {len(b.orbits)} orbits of period {b.orbits[0].periods} over {parameter} = "
+                      f"{min(values):.6g} to {max(values):.6g} {unit}, {sum(o.stable for o in b.orbits)} stable; "
+                      f"{b.stopped}", highlight=False, soft_wrap=True)
     for item in bifurcations:
         console.print(f"  {item['kind']} at {parameter} = {item['parameter']:.9g} {unit} (branch {item['branch']})",
                       highlight=False, soft_wrap=True)
+    for gap in gaps:
+        console.print(f"gap from {parameter} = {gap['start']:.6g} to {gap['stop']:.6g} {unit}: {gap['reason']}",
+                      highlight=False, soft_wrap=True)
+
+
+def _check_settings(period: int, max_points: int, transient: int, step: float, doublings: int, brute_force: int,
+                    plot: Path | None) -> None:
+    """Refuse settings out of range, before any work."""
+    from camdyn.continuation.branches import MIN_STEP
+
+    if period < 1 or max_points < 2 or transient < 1 or not step >= MIN_STEP:
+        raise ParameterError(f"--period and --transient must be at least 1, --max-points at least 2, --step at "
+                             f"least {MIN_STEP:g}")
+    if doublings < 0 or brute_force < 0 or brute_force == 1:
+        raise ParameterError("--doublings must be at least 0, --brute-force 0 or at least 2")
+    if brute_force and plot is None:
+        raise ParameterError("--brute-force draws the diagram under the branches of --plot: give --plot")
+
+
+def _max_time(text: str | None) -> float:
+    """``--max-time`` [s]: text with a unit of time, or no limit."""
+    import math
+
+    from camdyn.params.units import parse_quantity
+
+    if text is None:
+        return math.inf
+    seconds = float(parse_quantity(text, "s", "--max-time"))
+    if not (seconds > 0 and math.isfinite(seconds)):
+        raise ParameterError(f"--max-time must be a positive time such as 10min, got {text!r}")
+    return seconds
 
 
 def _brute_force(source, set_, parameter, first, last, count, quiet):

@@ -198,14 +198,16 @@ def bifurcation_translating_command(source: str, assignments, speeds: str, revol
 
 def continue_translating_command(source: str, assignments, parameter: str, start: str, stop: str, period: int,
                                  step: float, max_points: int, transient: int, doublings: int, brute_force: int,
-                                 plot: Path | None, out: Path | None, quiet: bool, json_out: bool) -> None:
+                                 plot: Path | None, out: Path | None, quiet: bool, json_out: bool,
+                                 cover: bool = True, max_time: float = math.inf) -> None:
     """Run ``camdyn continue`` on a translating follower: its branch of periodic orbits in
     the cam speed, the orbits' state at cam angle 0 (the section of ``camdyn
     bifurcation``), the period-doubled branches born on it, and with ``--brute-force N``
     the Poincaré section at N speeds under the branches of ``--plot`` (the outputs are
-    checked already)."""
+    checked already); with ``cover``, restarts past where a branch ends inside the range
+    (:func:`~camdyn.continuation.coverage.covered_branches`)."""
     from camdyn.continuation.branches import MIN_STEP
-    from camdyn.continuation.results import switch_doublings
+    from camdyn.continuation.coverage import coverage_summary, covered_branches, gap_records
     from camdyn.continuation.translating import RPM, SPEED_KEY, trace_translating, translating_dataset
 
     if parameter != SPEED_KEY:
@@ -223,7 +225,8 @@ def continue_translating_command(source: str, assignments, parameter: str, start
     follower, spec = _without_friction(source, assignments, "camdyn continue")
     problem, branch = trace_translating(follower, f"{float(first)!r} rad/s", f"{float(last)!r} rad/s", period,
                                         step=step, max_points=max_points, transient=transient)
-    branches = [branch, *switch_doublings(problem, branch, last, doublings, step, max_points)]
+    coverage, branches = covered_branches(problem, branch, first, last, step, max_points, transient, doublings,
+                                          cover, max_time)
     ds = translating_dataset(problem, branches)
     ds.attrs["name"] = spec.name
     files = []
@@ -242,10 +245,10 @@ def continue_translating_command(source: str, assignments, parameter: str, start
              for k, v, b in zip(ds["bifurcation_kind"].values, ds["bifurcation_parameter"].values,
                                 ds["bifurcation_branch"].values)]
     if json_out:
-        summary = {"parameter": SPEED_KEY, "units": "rad/s", "points": len(branch.orbits),
-                   "stable_points": sum(o.stable for o in branch.orbits), "bifurcation_count": len(found),
-                   "stopped": branch.stopped, "branch_count": len(branches)}
-        emit_json("continue", summary, branches=_orbit_records(ds, len(branches)), bifurcations=found, files=files)
+        summary = {"parameter": SPEED_KEY, "units": "rad/s", **coverage_summary(coverage, branches),
+                   "bifurcation_count": len(found)}
+        emit_json("continue", summary, branches=_orbit_records(ds, len(branches)), bifurcations=found,
+                  gaps=gap_records(coverage), files=files)
         return
     for index, item in enumerate(branches):
         rpm = [o.parameter / RPM for o in item.orbits]
@@ -254,6 +257,9 @@ def continue_translating_command(source: str, assignments, parameter: str, start
                       + ("" if index == 0 else f" (branch {index})"), highlight=False, soft_wrap=True)
     for item in found:
         console.print(f"  {item['kind']} at {SPEED_KEY} = {item['speed_rpm']:.9g} rpm (branch {item['branch']})",
+                      highlight=False, soft_wrap=True)
+    for gap in coverage.gaps:
+        console.print(f"gap from {SPEED_KEY} = {gap.start / RPM:.6g} to {gap.stop / RPM:.6g} rpm: {gap.reason}",
                       highlight=False, soft_wrap=True)
 
 
