@@ -165,6 +165,32 @@ def test_map_command_refuses_tolerances_simulate_refuses(tmp_path, capsys):
     assert status == 2 and "atol = 10.0 is outside the sensible range 1e-16 to 0.001 rad" in err
 
 
+@pytest.mark.parametrize("vary, words", [
+    ({"key": "motion.speed", "start": "8 Hz", "stop": "8 Hz", "num": 4}, "gives the value 8 Hz 4 times"),
+    ({"key": "motion.speed", "values": ["8 Hz", "10 Hz", "480 rpm"]}, "gives the value 8 Hz 2 times"),
+    ({"key": "cam.runout", "values": ["3 mm", "3.5 mm", "3 mm"]}, "gives the value 0.003 m 2 times"),
+])
+def test_sweep_spec_refuses_a_value_given_twice(tmp_path, vary, words):
+    from camdyn.sweeps.spec import spec_from_dict
+
+    with pytest.raises(ParameterError, match=re.escape(f"sweep spec: [[vary]] #1 ({vary['key']}) {words}")):
+        spec_from_dict(_sweep(tmp_path, vary=vary))
+
+
+def test_sweep_spec_says_when_its_values_run_backwards(tmp_path, capsys):
+    from camdyn.sweeps.spec import spec_from_dict
+
+    vary = {"key": "motion.speed", "start": "20 Hz", "stop": "10 Hz", "num": 3}
+    with pytest.warns(UserWarning, match=re.escape("(motion.speed) values decrease (from 20 to 10 Hz)")):
+        spec = spec_from_dict(_sweep(tmp_path, vary=vary))
+    assert spec.vary[0].values == (20.0, 15.0, 10.0)          # run in the order given
+    with pytest.warns(UserWarning, match="values do not increase steadily"):
+        spec_from_dict(_sweep(tmp_path, vary={"key": "motion.speed", "values": ["10 Hz", "20 Hz", "15 Hz"]}))
+    status, err = _cli(capsys, "map", "sundar2014-impact", "--x", "cam.runout=2mm:2mm:3", "--out", tmp_path / "m.nc")
+    _one_error_line(status, err, "(cam.runout) gives the value 0.002 m 3 times")
+    assert not (tmp_path / "m.nc").exists()
+
+
 # -- 3. sizes refused before anything is allocated -----------------------------------------
 
 

@@ -359,7 +359,55 @@ def test_a_sweep_failing_on_a_full_disk_leaves_no_lock(tmp_path, monkeypatch):
     with pytest.raises(StorageError, match="disk is full"):
         store_module.Checkpoint(_spec(tmp_path))
     assert not (tmp_path / "s.nc.lock").exists()
-    assert not list((tmp_path / "s.nc.parts").glob("*"))
+    assert not (tmp_path / "s.nc.parts").exists()
+
+
+def _closed_port() -> int:
+    """A local TCP port nothing listens on (bound, then released)."""
+    import socket
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def test_an_unreachable_dask_scheduler_is_refused_at_once_leaving_nothing(tmp_path):
+    import time
+
+    from camdyn.sweeps import run_sweep
+
+    spec = _spec(tmp_path)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    started = time.monotonic()
+    with pytest.raises(ParameterError, match=r"cannot reach the Dask scheduler at 'tcp://127.0.0.1:\d+' \(.*refused"):
+        run_sweep(spec, dask=f"tcp://127.0.0.1:{_closed_port()}", progress=False)
+    # refused by the address check, not after the client's 20 s connection timeout
+    assert time.monotonic() - started < 15
+    with pytest.raises(ParameterError, match="the host 'nohost.invalid' is not known"):
+        run_sweep(spec, dask="tcp://nohost.invalid:8786", progress=False)
+    assert sorted(p.name for p in tmp_path.iterdir()) == before      # no parts folder, manifest or lock
+
+
+def test_a_sweep_failing_before_its_first_chunk_leaves_no_parts_folder(tmp_path, monkeypatch):
+    from camdyn.sweeps import execution, run_sweep
+
+    def refused(spec):
+        raise ParameterError("refused while preparing the base point")
+
+    monkeypatch.setattr(execution, "_prepare_base", refused)
+    spec = _spec(tmp_path)
+    with pytest.raises(ParameterError, match="refused while preparing"):
+        run_sweep(spec, workers=0, progress=False)
+    assert not (tmp_path / "s.nc.parts").exists() and not (tmp_path / "s.nc.lock").exists()
+    # a parts folder with saved chunks is kept for the resume
+    from camdyn.sweeps.store import Checkpoint
+
+    store = Checkpoint(spec)
+    store.save(0, {"x": np.arange(3.0)})
+    store.close()
+    with pytest.raises(ParameterError, match="refused while preparing"):
+        run_sweep(spec, workers=0, progress=False)
+    assert (tmp_path / "s.nc.parts" / "chunk_000000.npz").exists()
 
 
 def test_a_failed_write_removes_the_folders_it_created(tmp_path, monkeypatch):

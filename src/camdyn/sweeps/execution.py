@@ -33,6 +33,7 @@ import contextlib
 import multiprocessing
 import os
 import re
+import socket
 import threading
 import warnings
 
@@ -56,10 +57,14 @@ from camdyn.sweeps.families import STATUS_OK, STATUS_REFUSED, STATUS_SOLVER
 from camdyn.sweeps.spec import SweepSpec
 from camdyn.sweeps.store import Checkpoint
 
-__all__ = ["check_dask_address", "quiet_resource_tracker", "compute_chunk", "prepare_chunk", "run_sweep",
-           "default_workers", "QUIET_DASK"]
+__all__ = ["check_dask_address", "probe_dask_scheduler", "quiet_resource_tracker", "compute_chunk", "prepare_chunk",
+           "run_sweep", "default_workers", "QUIET_DASK"]
 
 MAX_STEPS_PER_REVOLUTION = 200_000
+
+#: Longest the check of a Dask scheduler's address waits for a TCP connection [s]; the
+#: client's own connection then waits up to 20 s.
+SCHEDULER_PROBE_TIMEOUT = 5.0
 
 #: Dask settings for the LocalCluster of ``dask="local"`` (and this process's client):
 #: the event-loop watchdog (default every 20 ms), the workers' statistical profiler
@@ -260,6 +265,34 @@ def check_dask_address(dask: str | None) -> None:
                              f"got {dask!r}")
 
 
+def probe_dask_scheduler(dask: str | None, timeout: float = SCHEDULER_PROBE_TIMEOUT) -> None:
+    """Refuse a ``tcp://`` scheduler address that cannot be reached, before the sweep
+    writes anything (its checkpoint folder, its lock): a host name that does not resolve
+    or a port that refuses the connection at once, an unreachable host after ``timeout``
+    seconds. Other protocols (tls, ucx, ws, inproc) and ``"local"`` are left to Dask.
+
+    Raises
+    ------
+    ParameterError
+        Naming the address and why it cannot be reached.
+    """
+    if not isinstance(dask, str) or not dask.startswith("tcp://"):
+        return
+    host, _, port = dask[len("tcp://"):].rpartition(":")
+    host = host.strip("[]")
+    try:
+        socket.getaddrinfo(host, int(port), type=socket.SOCK_STREAM)
+    except (socket.gaierror, UnicodeError, ValueError, OverflowError) as exc:
+        raise ParameterError(f"cannot reach the Dask scheduler at {dask!r}: the host {host!r} is not known "
+                             f"({getattr(exc, 'strerror', None) or exc})") from None
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout):
+            pass
+    except (OSError, ValueError, OverflowError) as exc:
+        why = f"no answer within {timeout:g} s" if isinstance(exc, TimeoutError) else exc.strerror or str(exc)
+        raise ParameterError(f"cannot reach the Dask scheduler at {dask!r} ({why})") from None
+
+
 def _stop_workers(pool: cf.ProcessPoolExecutor) -> None:
     """Stop a local pool at once (an interrupt or a failure): queued chunks are cancelled
     and the worker processes terminated, not waited for."""
@@ -336,6 +369,7 @@ def run_sweep(spec: SweepSpec, workers: int | None = None, dask: str | None = No
     if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
         raise ParameterError(f"threads must be a whole number >= 1, got {threads!r}")
     check_dask_address(dask)
+    probe_dask_scheduler(dask)
     say = echo or (lambda _msg: None)
     store = Checkpoint(spec, restart=restart, say=say)
     try:
@@ -345,6 +379,9 @@ def run_sweep(spec: SweepSpec, workers: int | None = None, dask: str | None = No
         saved = len(store.done())
         raise SweepInterrupted(f"interrupted: {saved} of {spec.chunks} chunks are saved in {store.folder}; "
                                f"run the same command again to resume") from None
+    except Exception:
+        store.discard_if_unused()   # refused or failed before its first chunk: nothing left behind
+        raise
     finally:
         store.close()
     return xr.open_dataset(path, engine="h5netcdf")

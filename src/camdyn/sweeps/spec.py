@@ -283,6 +283,7 @@ def _values(i: int, entry: dict, key_unit) -> Vary:
             raise ParameterError(f"sweep spec: {where} spacing must be 'linear' or 'log', got {spacing!r}")
     if not np.all(np.isfinite(values)):
         raise ParameterError(f"sweep spec: {where} ({key}) has a value that is not finite")
+    _check_order(f"sweep spec: {where} ({key})", values, si_unit)
     dimension = entry.get("dimension", key)
     if not isinstance(dimension, str) or not dimension.strip():
         raise ParameterError(f"sweep spec: {where} dimension must be a name")
@@ -290,6 +291,23 @@ def _values(i: int, entry: dict, key_unit) -> Vary:
     display, factor = _display_unit(convert, written, si_unit)
     return Vary(key=key, dimension=dimension.strip(), values=tuple(float(v) for v in values),
                 unit=si_unit, display_unit=display, display_factor=factor)
+
+
+def _check_order(what: str, values: np.ndarray, si_unit: str) -> None:
+    """Refuse a value given twice (``start = stop`` with ``num > 1``, or a list repeating
+    one): its points would be computed again and the result's coordinate could not tell
+    them apart. Warn about values that do not increase: they are run and stored in the
+    order given (the result's coordinate decreases, or jumps back)."""
+    unique, counts = np.unique(values, return_counts=True)
+    if len(unique) < len(values):
+        value = unique[np.argmax(counts)]
+        raise ParameterError(f"{what} gives the value {value:.6g} {si_unit} {counts.max()} times (start = stop, "
+                             f"or a value listed twice): give each value once")
+    if len(values) > 1 and not np.all(np.diff(values) > 0):
+        shape = "decrease" if np.all(np.diff(values) < 0) else "do not increase steadily"
+        warnings.warn(f"{what} values {shape} (from {values[0]:.6g} to {values[-1]:.6g} {si_unit}): the points are "
+                      f"run and stored in that order, and the result's coordinate with them",
+                      stacklevel=3)
 
 
 #: the number at the head of a quantity's text, e.g. ``3.5`` of ``"3.5 mm"``

@@ -79,10 +79,12 @@ class Checkpoint:
         self._verified: set[int] = set()   # chunks this process wrote or has checked
         self._lock_path = Path(str(spec.output) + ".lock")
         self._lock = _lock(self._lock_path)
+        self._created = False
         try:
             manifest = self.folder / "manifest.json"
             if self.folder.exists() and restart:
                 shutil.rmtree(self.folder)
+            self._created = not self.folder.exists()   # this run makes the parts folder
             if manifest.exists():
                 try:
                     old = json.loads(manifest.read_text()).get("digest")
@@ -101,8 +103,18 @@ class Checkpoint:
                                                  "points": spec.points, "camdyn": __version__}))
             remove_stale(self.folder)   # parts half written by a killed run (not per part: O(chunks^2))
         except BaseException:   # refused (another spec), or the disk is full: no lock left behind
+            self.discard_if_unused()
             self.close()
             raise
+
+    def discard_if_unused(self) -> None:
+        """Remove the parts folder this run created when it holds no chunk yet (only the
+        manifest): a sweep refused or failing before its first chunk leaves nothing behind."""
+        if not self._created or any(self.folder.glob("chunk_*")):
+            return
+        with contextlib.suppress(OSError):
+            (self.folder / "manifest.json").unlink(missing_ok=True)
+            self.folder.rmdir()
 
     def close(self) -> None:
         """Release the output's lock (also released when the process ends, however it ends)."""
