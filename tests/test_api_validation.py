@@ -400,6 +400,22 @@ def test_more_workers_than_cores_are_capped_with_a_warning():
         check_workers("4")
 
 
+def test_more_threads_than_cores_are_capped_with_a_warning(monkeypatch):
+    from camdyn.sweeps import execution
+
+    monkeypatch.setattr(execution, "default_workers", lambda: 4)
+    with pytest.warns(UserWarning, match="threads = 1000 per worker on 1 process.* the 4 cores .*; using 4"):
+        assert execution.check_threads(1000, 0) == 4                   # inline: this process
+    with pytest.warns(UserWarning, match="threads = 3 per worker on 2 process.*; using 2"):
+        assert execution.check_threads(3, 2) == 2
+    with pytest.warns(UserWarning, match="using 1"):
+        assert execution.check_threads(2, 4) == 1
+    assert execution.check_threads(2, 2) == 2 and execution.check_threads(8, 4, dask="local") == 8
+    for bad in (0, -1, 1.5, "2", True):
+        with pytest.raises(ParameterError, match="threads must be a whole number >= 1"):
+            execution.check_threads(bad, 1)
+
+
 # -- 5. TOML nested without bound ------------------------------------------------------------
 
 

@@ -57,8 +57,8 @@ from camdyn.sweeps.families import STATUS_OK, STATUS_REFUSED, STATUS_SOLVER
 from camdyn.sweeps.spec import SweepSpec
 from camdyn.sweeps.store import Checkpoint
 
-__all__ = ["check_dask_address", "probe_dask_scheduler", "quiet_resource_tracker", "compute_chunk", "prepare_chunk",
-           "run_sweep", "default_workers", "QUIET_DASK"]
+__all__ = ["check_dask_address", "check_threads", "probe_dask_scheduler", "quiet_resource_tracker", "compute_chunk",
+           "prepare_chunk", "run_sweep", "default_workers", "QUIET_DASK"]
 
 MAX_STEPS_PER_REVOLUTION = 200_000
 
@@ -98,6 +98,22 @@ def check_workers(workers, dask: str | None = None) -> int:
                       UserWarning, stacklevel=3)
         return cores
     return int(workers)
+
+
+def check_threads(threads, workers: int, dask: str | None = None) -> int:
+    """The numba threads per worker asked for: a whole number >= 1, refused otherwise.
+    Local processes (``workers``, at least this one) times their threads beyond this
+    process's cores only compete for them, so ``threads`` is lowered to the cores per
+    process, with a warning (a Dask cluster's workers are not counted)."""
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
+        raise ParameterError(f"threads must be a whole number >= 1, got {threads!r}")
+    processes, cores = max(int(workers), 1), default_workers()
+    if dask is None and processes * threads > cores:
+        capped = max(1, cores // processes)
+        warnings.warn(f"threads = {threads} per worker on {processes} process(es) is more than the {cores} cores "
+                      f"this process may use; using {capped}", UserWarning, stacklevel=3)
+        return capped
+    return int(threads)
 
 
 def prepare_chunk(spec: SweepSpec, chunk: int) -> dict:
@@ -366,8 +382,7 @@ def run_sweep(spec: SweepSpec, workers: int | None = None, dask: str | None = No
         raise ParameterError(f"expected a SweepSpec (from camdyn.sweeps.load_spec or spec_from_dict), got "
                              f"{type(spec).__name__} {spec!r:.60}{hint}")
     workers = default_workers() if workers is None else check_workers(workers, dask)
-    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
-        raise ParameterError(f"threads must be a whole number >= 1, got {threads!r}")
+    threads = check_threads(threads, workers, dask)
     check_dask_address(dask)
     probe_dask_scheduler(dask)
     say = echo or (lambda _msg: None)
