@@ -25,6 +25,7 @@ from camdyn.params.config import system_to_toml
 from camdyn.params.system import System
 from camdyn.params.units import parse_speed
 from camdyn.simulation import limits
+from camdyn.simulation.settling import check_settled
 from camdyn.systems import registry as systems
 from camdyn.systems.protocol import BoundModel, Model
 
@@ -208,6 +209,13 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
         Over ``time``: the state and every force and kinematic channel with ``units``
         and ``long_name``; over ``impact``: the impact table. Attributes record the
         parameters (as TOML), the solver counters and the static equilibrium.
+
+    Warns
+    -----
+    TransientWarning
+        When the run's last cam period repeats none of the 8 before it (within 1e-3 of
+        ``alpha``'s range, :mod:`camdyn.simulation.settling`): its harmonics and extremes
+        then describe a transient, or a motion that is not periodic.
     """
     if isinstance(system, (Model, BoundModel)):   # a model of the model protocol
         if method != "auto" or variables is not None:
@@ -223,18 +231,8 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
         raise ParameterError(f"method must be one of {sorted(METHODS)}, got {method!r}")
     limits.check_tolerances(rtol, atol)
     wanted = check_variables(variables)
-    revolutions = limits.check_number("revolutions", revolutions)
-    if duration is not None:
-        duration = limits.check_number("duration", duration, "s")
     period = system.motion.period
-    if duration is None:
-        if not math.isfinite(period):
-            raise ParameterError("the cam does not move (speed 0): give a duration in seconds")
-        if not (math.isfinite(revolutions) and revolutions > 0):
-            raise ParameterError(f"revolutions must be positive, got {revolutions!r}")
-        duration = revolutions * period
-    if not (math.isfinite(duration) and duration > 0):
-        raise ParameterError(f"duration must be positive, got {duration!r}")
+    duration = _duration(period, revolutions, duration)
     max_step, max_steps = limits.check_steps(max_step, max_steps, duration)
     n_out = limits.check_sampling(sample_rate, period, duration)
     limits.check_memory(limits.result_bytes(n_out, 3 + len(CHANNELS)), "the simulation's result")
@@ -257,7 +255,25 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
     if status != driver.STATUS_OK:
         t_fail = t_out[np.isnan(y[:, 0])][0] if np.isnan(y[:, 0]).any() else duration
         raise SimulationError(f"simulation {driver.STATUS_MESSAGES[status]} near t = {t_fail:.6g} s")
+    check_settled(t_out, y[:, 0], period, "alpha")
     return _dataset(system, prep, t_out, y, modes, events, counters, elapsed, rtol, atol, method, wanted)
+
+
+def _duration(period: float, revolutions, duration) -> float:
+    """The run's length [s]: ``duration`` [s] if given, else ``revolutions`` cam periods of
+    ``period`` [s]; refused unless positive and finite."""
+    revolutions = limits.check_number("revolutions", revolutions)
+    if duration is not None:
+        duration = limits.check_number("duration", duration, "s")
+    if duration is None:
+        if not math.isfinite(period):
+            raise ParameterError("the cam does not move (speed 0): give a duration in seconds")
+        if not (math.isfinite(revolutions) and revolutions > 0):
+            raise ParameterError(f"revolutions must be positive, got {revolutions!r}")
+        duration = revolutions * period
+    if not (math.isfinite(duration) and duration > 0):
+        raise ParameterError(f"duration must be positive, got {duration!r}")
+    return duration
 
 
 #: The state's time series: name, unit, long name, in the state's order.
