@@ -60,6 +60,9 @@ __all__ = ["DirectImpactEstimate", "ImpactSamples", "estimate_impact_damping_dir
 #: Largest ``|correlation|`` of ``beta`` and ``n`` at which ``n`` still counts as told apart
 #: from ``beta`` [-]; above it the estimate is flagged not identifiable.
 COLLINEARITY_LIMIT = 0.999
+#: Smallest spread (largest minus smallest over the median) of the impacts' peak
+#: penetrations for ``n`` to count as identified across impacts [-].
+SPREAD_LIMIT = 0.05
 #: Largest free-flight level of the rebuilt contact force, as a fraction of the median
 #: peak force, before the record is refused as drifting [-].
 DRIFT_LIMIT = 0.02
@@ -104,6 +107,7 @@ class DirectImpactEstimate:
     peak_penetration: float      # median peak penetration over impacts [m]
     confidence: dict             # 95 % intervals of beta, n, damping_at_peak
     correlation: float           # correlation of beta and n [-] (NaN when n is fixed)
+    correlation_at_peak: float   # correlation of log(damping_at_peak) and n [-]
     identifiable: bool           # False when n cannot be told from beta
     diagnosis: str               # why not identifiable ("" when it is)
     rms_residual: float          # rms force residual over the contact samples [N]
@@ -122,7 +126,8 @@ class DirectImpactEstimate:
             "mode": self.mode, "stiffness": self.stiffness, "damping_at_peak": self.damping_at_peak,
             "damping_at_peak_units": "N*s/m", "peak_penetration": self.peak_penetration,
             "peak_penetration_units": "m", "confidence_95": {k: list(v) for k, v in self.confidence.items()},
-            "correlation": self.correlation, "identifiable": self.identifiable, "diagnosis": self.diagnosis,
+            "correlation": self.correlation, "correlation_at_peak": self.correlation_at_peak,
+            "identifiable": self.identifiable, "diagnosis": self.diagnosis,
             "rms_residual": self.rms_residual, "impacts_used": self.impacts_used, "records": self.records,
             "per_impact": {k: np.asarray(v).tolist() for k, v in self.per_impact.items()},
         }
@@ -321,7 +326,7 @@ def _fit_anchors(s: ImpactSamples, exponent: float, anchors: np.ndarray, damping
 
 def estimate_impact_damping_direct(system, records, speed=None, runout=None, exponent: float | None = None,
                                    fit_stiffness: bool = False, min_contact_samples: int = 8,
-                                   max_iterations: int = 6) -> DirectImpactEstimate:
+                                   max_iterations: int = 30) -> DirectImpactEstimate:
     """Identify ``beta``, ``n`` directly by restoring-force regression (see the module).
 
     Parameters
@@ -416,21 +421,31 @@ def _estimate(s: ImpactSamples, exponent, fit_stiffness, max_iterations, n_rec) 
         # d log(c_peak) = d beta / beta + log(delta_peak) d n
         g = np.array([1.0 / beta, math.log(peak)])
         sd_c = damping * math.sqrt(float(g @ cov[:2, :2] @ g))
+        # in (log damping_at_peak, n) the valley of beta against n is straightened
+        corr_peak = float((g @ cov[:2, 1]) * damping / (sd_c * sd_n))
         conf["n"] = interval_95(n_hat, sd_n, dof)
     else:
-        corr, sd_c = math.nan, damping * sd_b / beta
+        corr, corr_peak, sd_c = math.nan, math.nan, damping * sd_b / beta
         conf["n"] = (n_hat, n_hat)
     conf["damping_at_peak"] = interval_95(damping, sd_c, dof)
     identifiable, why = True, ""
-    if free and abs(corr) > COLLINEARITY_LIMIT:
+    if free and abs(corr_peak) > COLLINEARITY_LIMIT:
         identifiable = False
-        why = (f"beta and n are correlated at {corr:.5f} (limit {COLLINEARITY_LIMIT}): the impacts are too alike "
+        why = (f"the damping at the peak penetration and n are correlated at {corr_peak:.5f} (limit "
+               f"{COLLINEARITY_LIMIT}): the impacts are too alike "
                f"(approach velocities and peak penetrations) to tell n from beta; fix n, or add records at other "
                f"speeds or runouts")
+    spread = float(np.ptp(peaks) / peak)
+    if free and identifiable and spread < SPREAD_LIMIT:
+        identifiable = False
+        why = (f"the impacts' peak penetrations spread by {spread:.2%} only (at least {SPREAD_LIMIT:.0%} wanted): n "
+               "then rests on the shape of the force within each impact alone, not on impacts of different "
+               "approach velocity; fix n, or add records at other speeds or runouts")
     stiffness = float(s.stiffness[0] * (coef[-1] if fit_stiffness else 1.0))
     return DirectImpactEstimate(
         beta=float(beta), exponent=n_hat, mode="free" if free else "fixed", stiffness=stiffness,
         damping_at_peak=float(damping), peak_penetration=peak, confidence=conf, correlation=corr,
+        correlation_at_peak=corr_peak,
         identifiable=identifiable, diagnosis=why, rms_residual=math.sqrt(float(np.mean(res ** 2))),
         impacts_used=s.count, records=n_rec, iterations=iterations,
         per_impact=per_impact_table(reg, s, anchors, n_hat, beta, jac))

@@ -90,13 +90,15 @@ class ForceRegression:
         if self.fit_stiffness:
             cols.append(self.elastic)
         jac = np.column_stack(cols)
-        bread = np.linalg.pinv(jac.T @ jac)
+        norm = np.linalg.norm(jac, axis=0)
+        scaled = jac / norm                      # columns scaled to unit length: beta and n differ by 1e10
+        bread = np.linalg.pinv(scaled.T @ scaled)
         meat = np.zeros_like(bread)
         for k in range(impacts):
-            g = jac[self.impact == k].T @ res[self.impact == k]
+            g = scaled[self.impact == k].T @ res[self.impact == k]
             meat += np.outer(g, g)
         factor = impacts / max(impacts - 1, 1)
-        return factor * bread @ meat @ bread, jac
+        return factor * (bread @ meat @ bread) / np.outer(norm, norm), jac
 
 
 def per_impact_table(reg: ForceRegression, s, anchors, exponent, beta, jac) -> dict:
