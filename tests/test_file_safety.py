@@ -310,6 +310,43 @@ def test_temporaries_of_a_killed_writer_are_removed_by_the_next_write(tmp_path, 
         alive.stdout.close()
 
 
+#: The command line writing a record whose fsync blocks: the write is still under way
+#: whenever the signal lands (it prints "writing" from inside the write).
+_BLOCKED_WRITER = """
+import os, sys, time
+def blocked(fd):
+    print("writing", flush=True)
+    time.sleep(600)
+os.fsync = blocked
+sys.argv = ["camdyn", *sys.argv[1:]]
+from camdyn.cli import run
+run()
+"""
+
+
+@pytest.mark.parametrize("sig", [signal.SIGHUP, signal.SIGTERM, signal.SIGINT])
+def test_a_command_stopped_during_its_write_leaves_no_temporary(tmp_path, sig):
+    # SIGHUP is what a closed terminal sends: handled as SIGTERM and Ctrl-C are
+    (tmp_path / "meas.csv").write_text("previous\n")
+    proc = subprocess.Popen([sys.executable, "-c", _BLOCKED_WRITER, "synthesize", "sundar2014-impact", "--speed",
+                             "16Hz", "--revolutions", "2", "--out", "meas.csv", "--force"], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        assert proc.stdout.readline().strip() == "writing", proc.stderr.read()
+        assert len(list(tmp_path.glob(".meas.csv.*.tmp"))) == 1       # the write is under way
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    lines = [line for line in err.splitlines() if not line.startswith("warning: ")]
+    assert proc.returncode == 128 + int(sig) and lines == ["interrupted"], (proc.returncode, err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["meas.csv"]
+    assert (tmp_path / "meas.csv").read_text() == "previous\n"
+
+
 def test_a_stale_link_is_removed_without_following_it(tmp_path):
     victim = _victim(tmp_path)
     stale = _writer_killed_mid_write(tmp_path / "out.nc")

@@ -2,14 +2,20 @@
 
 :func:`run` is the console script's entry point. It installs the interrupt handling
 before the commands' heavy imports (numpy, numba, xarray, typer: about a second), so
-that Ctrl-C or SIGTERM during start-up also ends in one line and exit status 130 or 143,
-not in a traceback; :func:`camdyn.cli.app.main` then takes over.
+that Ctrl-C, SIGTERM or SIGHUP (a closed terminal) during start-up also ends in one line
+and exit status 130, 143 or 129, not in a traceback; :func:`camdyn.cli.app.main` then
+takes over.
 """
 
 import atexit
 import os
 import signal
 import sys
+
+#: The signals that stop a command as Ctrl-C does (workers stopped, temporaries removed,
+#: checkpoints kept), with exit status 128 + the signal's number: SIGINT (130), SIGTERM
+#: (143) and SIGHUP (129, the terminal was closed; absent on Windows).
+STOP_SIGNALS = tuple(s for s in (signal.SIGINT, signal.SIGTERM, getattr(signal, "SIGHUP", None)) if s is not None)
 
 
 def run() -> None:
@@ -22,7 +28,7 @@ def run() -> None:
         raise KeyboardInterrupt
 
     try:
-        for sig in (signal.SIGINT, signal.SIGTERM):
+        for sig in STOP_SIGNALS:
             if signal.getsignal(sig) is not signal.SIG_IGN:
                 signal.signal(sig, stop)
         from camdyn.cli.app import main
@@ -39,7 +45,7 @@ def run() -> None:
 
 
 def _leave(status: int) -> None:
-    """Exit with ``status``; after an interrupt (130, 143), without the interpreter's
+    """Exit with ``status``; after an interrupt (130, 143, 129), without the interpreter's
     finalization.
 
     An interrupted command has stopped its workers and kept its checkpoints. Its exit
@@ -50,7 +56,7 @@ def _leave(status: int) -> None:
     no message) in 3 of 14 tries of Ctrl-C during the imports, and once in a full test
     run after ``main()`` had returned 130 (the path inside CPython was not pinned down).
     """
-    if status in (128 + signal.SIGINT, 128 + signal.SIGTERM):
+    if status in [128 + int(sig) for sig in STOP_SIGNALS]:
         _ignore_late_signals()
         try:
             atexit._run_exitfuncs()   # what a normal exit runs first; private but stable
@@ -63,12 +69,12 @@ def _leave(status: int) -> None:
 
 
 def _ignore_late_signals() -> None:
-    """The command is over: ignore SIGINT and SIGTERM while the interpreter shuts down.
+    """The command is over: ignore :data:`STOP_SIGNALS` while the interpreter shuts down.
 
     Python's finalization puts back the default handlers of the signals it handled, so a
     signal arriving then (numba and dask make shutdown take a few tenths of a second)
     would kill the process without a word. Ignored handlers are left as they are.
     """
-    for sig in (signal.SIGINT, signal.SIGTERM):
+    for sig in STOP_SIGNALS:
         if signal.getsignal(sig) is not signal.SIG_IGN:
             signal.signal(sig, signal.SIG_IGN)

@@ -1,8 +1,8 @@
 """The ``camdyn`` command line: the one place where every command is registered.
 
 Every failure prints one line on standard error, without a traceback: exit status 2
-for bad input, 1 for a failure at run time, 130 for Ctrl-C and 143 for SIGTERM
-(:func:`main`).
+for bad input, 1 for a failure at run time, 130 for Ctrl-C, 143 for SIGTERM and 129 for
+SIGHUP (a closed terminal) (:func:`main`).
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import typer
 from typer.core import TyperGroup
 
 from camdyn import __version__
-from camdyn.cli import analysis, continuation, impact, records, simulate, sweep, warmup
+from camdyn.cli import STOP_SIGNALS, analysis, continuation, impact, records, simulate, sweep, warmup
 from camdyn.cli.common import compile_notice
 from camdyn.errors import RUNTIME_ERRORS, CamdynError, SweepInterrupted
 
@@ -105,8 +105,9 @@ app.command("compile")(_interruptible(warmup.compile_core))
 
 
 def _on_signal(signum, frame):
-    """SIGINT and SIGTERM: remember which arrived and stop as Ctrl-C does (workers stopped,
-    checkpoints kept); the exit status is 128 + the signal's number (130, 143). An
+    """SIGINT, SIGTERM and SIGHUP: remember which arrived and stop as Ctrl-C does (workers
+    stopped, temporaries removed, checkpoints kept); the exit status is 128 + the signal's
+    number (130, 143, 129). An
     interrupt that lands inside a library's callback (numba compiling on first use) comes
     out as that library's own error; the flag set here still marks it as an interrupt."""
     _interrupt["signal"] = signal.Signals(signum)
@@ -161,7 +162,7 @@ def main(argv=None) -> int:
 
     Returns the exit status: 0 success; 2 bad input (a camdyn input error or a usage
     error); 1 a failure at run time (the solver stopped, a write failed, an unexpected
-    error); 130 interrupted by Ctrl-C (143 by SIGTERM). Set ``CAMDYN_DEBUG=1`` to see the
+    error); 130 interrupted by Ctrl-C (143 by SIGTERM, 129 by SIGHUP). Set ``CAMDYN_DEBUG=1`` to see the
     traceback of an unexpected error.
     """
     _interrupt.update(signal=signal.SIGINT, exception=None, arrived=False, active=True, later=None)
@@ -169,7 +170,7 @@ def main(argv=None) -> int:
     warnings.showwarning, sys.unraisablehook = _show_warning, _quiet_unraisable
     previous = {}
     try:
-        for sig in (signal.SIGINT, signal.SIGTERM):
+        for sig in STOP_SIGNALS:
             if signal.getsignal(sig) is not signal.SIG_IGN:
                 previous[sig] = signal.signal(sig, _on_signal)
     except ValueError:   # not the main thread: leave the signals alone
