@@ -374,6 +374,29 @@ def test_half_written_parts_of_a_killed_sweep_are_removed_on_resume(tmp_path):
         store.close()
 
 
+def test_a_lock_left_by_a_killed_sweep_is_taken_and_removed_by_the_next(tmp_path):
+    from camdyn.sweeps.store import Checkpoint
+
+    spec = _spec(tmp_path)
+    holder = ("import sys, time\nfrom camdyn.sweeps import load_spec\nfrom camdyn.sweeps.store import Checkpoint\n"
+              "store = Checkpoint(load_spec(sys.argv[1]))\nprint('locked', flush=True)\ntime.sleep(600)\n")
+    proc = subprocess.Popen([sys.executable, "-c", holder, str(tmp_path / "s.toml")], stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "locked"
+        with pytest.raises(ParameterError, match=f"another sweep \\(pid {proc.pid}\\) is writing"):
+            Checkpoint(spec)                                   # held: refused
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(30)
+        proc.stdout.close()
+    lock = tmp_path / "s.nc.lock"
+    assert lock.read_text() == f"pid {proc.pid}"             # left behind by the killed sweep
+    store = Checkpoint(spec)                                 # stale: its holder is gone, so it is free
+    assert lock.read_text() == f"pid {os.getpid()}"
+    store.close()
+    assert not lock.exists()
+
+
 def test_a_sweep_refused_for_a_changed_spec_leaves_no_lock(tmp_path):
     from camdyn.sweeps.store import Checkpoint
 
