@@ -7,6 +7,7 @@ replaced by a failure, so the test fails instead of hanging."""
 
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -431,6 +432,26 @@ def test_deep_toml_is_refused_with_the_limit(tmp_path, capsys, text):
         load_system(path)
     status, err = _cli(capsys, "simulate", path)
     _one_error_line(status, err, f"TOML nested deeper than {MAX_TOML_DEPTH} levels")
+
+
+def test_a_toml_file_too_long_is_refused_without_reading_it_whole(tmp_path, capsys, monkeypatch):
+    from camdyn.params.config import MAX_TOML_CHARS, load_system
+    from camdyn.sweeps.spec import load_spec
+
+    path = tmp_path / "long.toml"
+    path.write_text("# " + "x" * MAX_TOML_CHARS + "\n")
+
+    def whole(self, *args, **kwargs):
+        raise AssertionError(f"{self} read whole")
+
+    monkeypatch.setattr(Path, "read_text", whole)       # a file of gigabytes would be in memory
+    words = f"more than {MAX_TOML_CHARS} characters of TOML"
+    with pytest.raises(ParameterError, match=f"long.toml: {words}"):
+        load_system(path)
+    with pytest.raises(ParameterError, match=f"sweep spec long.toml: {words}"):
+        load_spec(path)
+    status, err = _cli(capsys, "simulate", path)
+    _one_error_line(status, err, words)
 
 
 def test_deep_sweep_spec_is_refused_with_the_limit(tmp_path):

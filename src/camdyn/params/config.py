@@ -37,7 +37,7 @@ from camdyn.params.profiles import SCHEMA as PROFILE_SCHEMA
 from camdyn.params.profiles import TranslatingSpec, list_translating_presets
 from camdyn.params.schema import Parameter, groups, parameter_index, parameters
 from camdyn.params.system import System
-from camdyn.params.toml_text import MAX_TOML_CHARS, MAX_TOML_DEPTH, flatten, loads_toml
+from camdyn.params.toml_text import MAX_TOML_CHARS, MAX_TOML_DEPTH, flatten, loads_toml, read_toml_text
 from camdyn.params.units import parse_quantity, parse_speed
 
 __all__ = [
@@ -77,7 +77,7 @@ def read_toml_file(source: str | Path) -> dict:
     :class:`PresetError` that says why it cannot be read."""
     path = Path(str(source))
     try:
-        return flatten(loads_toml(path.read_text(encoding="utf-8"), source))
+        return flatten(loads_toml(read_toml_text(path, source), source))
     except FileNotFoundError:
         raise PresetError(f"configuration file {str(source)!r} does not exist") from None
     except OSError as exc:
@@ -225,7 +225,7 @@ def read_table(source: str | Path) -> tuple[dict, str, str]:
         if not path.is_file():
             raise PresetError(f"configuration file {str(source)!r} does not exist")
         try:
-            text, name = path.read_text(encoding="utf-8"), path.stem
+            text, name = read_toml_text(path, source), path.stem
         except UnicodeDecodeError as exc:
             raise PresetError(f"{source}: not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
                               f"{exc.start}); a configuration file is TOML, saved as UTF-8") from None

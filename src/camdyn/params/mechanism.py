@@ -44,6 +44,7 @@ from pathlib import Path
 from camdyn.errors import ParameterError, UnitError, UnknownKeyError
 from camdyn.params.catalog import resolve
 from camdyn.params.config import loads_toml, read_toml_file
+from camdyn.params.toml_text import read_toml_text
 from camdyn.params.units import parse_quantity, parse_speed
 
 __all__ = ["KINDS", "DRIVE_KINDS", "SCHEMA", "MechanismSpec", "read_mechanism", "mechanism_spec_from_table",
@@ -324,7 +325,7 @@ def is_mechanism(source: str | Path) -> bool:
     """Whether ``source`` is a readable TOML file (or a preset) with a ``[mechanism]`` table."""
     path = Path(str(resolve(source)))
     try:
-        return path.is_file() and isinstance(loads_toml(path.read_text(encoding="utf-8"), source).get("mechanism"),
+        return path.is_file() and isinstance(loads_toml(read_toml_text(path, source), source).get("mechanism"),
                                              dict)
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
         return False

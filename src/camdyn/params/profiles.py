@@ -42,7 +42,7 @@ from pathlib import Path
 from camdyn.errors import ParameterError, PresetError, UnitError, UnknownKeyError
 from camdyn.params.catalog import preset_file, presets_of_kind, resolve
 from camdyn.params.follower_friction import FRICTION_SCHEMA, check_friction
-from camdyn.params.toml_text import flatten, loads_toml
+from camdyn.params.toml_text import flatten, loads_toml, read_toml_text
 from camdyn.params.units import parse_quantity, parse_speed, registry
 
 __all__ = ["SCHEMA", "SEGMENT_KEYS", "ARC_KEYS", "PROFILE_KINDS", "FACES", "CONTACT_LAWS", "HERTZ_DAMPING_LAWS",
@@ -427,7 +427,7 @@ def _source_text(source: str | Path) -> tuple[str, str, Path | None]:   # (text,
         raise PresetError(f"{str(source)!r} is neither a translating-follower preset "
                           f"({', '.join(list_translating_presets())}) nor a TOML file")
     try:
-        return path.read_text(encoding="utf-8"), path.stem, path.resolve().parent
+        return read_toml_text(path, source), path.stem, path.resolve().parent
     except UnicodeDecodeError:
         raise PresetError(f"{source}: not UTF-8 text; a configuration file is TOML, saved as UTF-8") from None
     except OSError as exc:
@@ -439,7 +439,7 @@ def declared_kind(source: str | Path) -> str | None:
     unreadable)."""
     path = Path(str(resolve(source)))
     try:
-        return _kind_in(path.read_text(encoding="utf-8"), source) if path.is_file() else None
+        return _kind_in(read_toml_text(path, source), source) if path.is_file() else None
     except (OSError, UnicodeDecodeError):
         return None
 
@@ -449,7 +449,7 @@ def is_translating(source: str | Path) -> bool:
     ``[follower] kind`` is ``"translating"``); False for anything unreadable."""
     path = Path(str(resolve(source)))
     try:
-        return path.is_file() and _kind_in(path.read_text(encoding="utf-8")) == TRANSLATING
+        return path.is_file() and _kind_in(read_toml_text(path, source)) == TRANSLATING
     except (OSError, UnicodeDecodeError):
         return False
 

@@ -10,7 +10,7 @@ import tomllib
 
 from camdyn.errors import ParameterError
 
-__all__ = ["loads_toml", "flatten", "MAX_TOML_DEPTH", "MAX_TOML_CHARS"]
+__all__ = ["loads_toml", "read_toml_text", "flatten", "MAX_TOML_DEPTH", "MAX_TOML_CHARS"]
 
 #: Deepest nesting of tables, arrays and inline tables a TOML file camdyn reads may have
 #: [-] (camdyn's own files nest three deep; Python's TOML parser recurses once per level).
@@ -18,6 +18,19 @@ MAX_TOML_DEPTH = 32
 #: Longest TOML file camdyn reads [characters]: a configuration or sweep spec is a few
 #: kilobytes; 10 MB is no configuration.
 MAX_TOML_CHARS = 10_000_000
+
+
+def read_toml_text(path, source="TOML") -> str:
+    """The text of the TOML file ``path`` (UTF-8), read no further than
+    :data:`MAX_TOML_CHARS` characters: a longer file (a record or an archive given as a
+    configuration) is refused with a :class:`ParameterError` naming ``source`` before it
+    is read whole into memory. ``OSError`` and ``UnicodeDecodeError`` pass to the caller."""
+    with open(path, encoding="utf-8") as fh:
+        text = fh.read(MAX_TOML_CHARS + 1)
+    if len(text) > MAX_TOML_CHARS:
+        raise ParameterError(f"{source}: more than {MAX_TOML_CHARS} characters of TOML, the most a configuration "
+                             f"may have")
+    return text
 
 
 def loads_toml(text: str, source="TOML") -> dict:

@@ -64,6 +64,7 @@ from camdyn import __version__
 from camdyn.errors import CamdynError, ParameterError
 from camdyn.params.config import loads_toml, system_from_toml
 from camdyn.params.system import System
+from camdyn.params.toml_text import read_toml_text
 from camdyn.sweeps.families import ROCKING_METRICS, family_of, result_variables
 
 __all__ = ["METRICS", "Vary", "SweepSpec", "load_spec", "spec_from_dict"]
@@ -460,7 +461,7 @@ def load_spec(path: str | Path) -> SweepSpec:
     if not path.is_file():
         raise ParameterError(f"sweep spec {str(path)!r} does not exist")
     try:
-        table = loads_toml(path.read_text(encoding="utf-8"), f"sweep spec {path.name}")
+        table = loads_toml(read_toml_text(path, f"sweep spec {path.name}"), f"sweep spec {path.name}")
     except UnicodeDecodeError as exc:
         raise ParameterError(f"sweep spec {path.name}: not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
                              f"{exc.start}); a sweep spec is TOML, saved as UTF-8") from None
