@@ -77,7 +77,7 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     system key or, for the flexible pivot, pivot.stiffness or pivot.damping; a cam under
     its drive (its orbits on the section at its starting angle, their period unknown) in
     a drive key (drive.free_speed, drive.shaft_inertia, ...) or the cam's or followers'."""
-    from camdyn.continuation.coverage import coverage_summary, covered_branches, gap_records
+    from camdyn.continuation.coverage import STALL_POINTS, coverage_summary, covered_branches, gap_records
     from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset
 
     check_outputs(netcdf=out, figure=plot, force=force)
@@ -105,7 +105,7 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     with bar:
         bar.phase(f"the first orbit ({transient} periods of transient, then Newton's method)")
         problem, branch = trace(system, parameter, first, last, period, step, max_points, transient,
-                                progress=bar.orbit, segments=segments)
+                                progress=bar.orbit, segments=segments, stall=STALL_POINTS if cover else 0)
         coverage, branches = covered_branches(problem, branch, first, last, step, max_points, transient, doublings,
                                               cover, limit, progress=bar.orbit, phase=bar.phase, segments=segments)
     records = [branch_records(problem, b) for b in branches]

@@ -207,7 +207,7 @@ def continue_translating_command(source: str, assignments, parameter: str, start
     checked already); with ``cover``, restarts past where a branch ends inside the range
     (:func:`~camdyn.continuation.coverage.covered_branches`)."""
     from camdyn.continuation.branches import MIN_STEP
-    from camdyn.continuation.coverage import coverage_summary, covered_branches, gap_records
+    from camdyn.continuation.coverage import STALL_POINTS, coverage_summary, covered_branches, gap_records
     from camdyn.continuation.translating import RPM, SPEED_KEY, trace_translating, translating_dataset
 
     if parameter != SPEED_KEY:
@@ -224,7 +224,8 @@ def continue_translating_command(source: str, assignments, parameter: str, start
         raise ParameterError("--brute-force draws the diagram under the branches of --plot: give --plot")
     follower, spec = _without_friction(source, assignments, "camdyn continue")
     problem, branch = trace_translating(follower, f"{float(first)!r} rad/s", f"{float(last)!r} rad/s", period,
-                                        step=step, max_points=max_points, transient=transient)
+                                        step=step, max_points=max_points, transient=transient,
+                                        stall=STALL_POINTS if cover else 0)
     coverage, branches = covered_branches(problem, branch, first, last, step, max_points, transient, doublings,
                                           cover, max_time)
     ds = translating_dataset(problem, branches)

@@ -46,7 +46,9 @@ from camdyn.continuation.ends import (
     contact_loss_end,
     flight_grazing_end,
     grazing_end,
+    half_distance,
     jumped_off_contact,
+    stall_end,
 )
 from camdyn.continuation.orbits import (
     SAMPLES_PER_PERIOD,
@@ -359,32 +361,29 @@ def _detect(job: _Continuation, a: _Point, b: _Point) -> list[Bifurcation]:
     return sorted(found, key=lambda item: float(a.tangent @ (job.pack(item.orbit) / job.scales)))
 
 
-def _half_distance(job: _Continuation, orbit: Orbit) -> float:
-    """Scaled distance between a period-``2k`` orbit's state and its state after ``k``
-    forcing periods: it falls to zero where the branch meets the period-``k`` orbit at
-    that orbit's period doubling, a branch point of the period-``2k`` problem (there
-    ``M^2 - I`` of the period-``k`` orbit is singular), where the continuation would creep
-    (on the chapter 3 rig the period-4 branch from 20.7 Hz spent 200 of its 300 points
-    within 1e-6 Hz of the period-2 branch's doubling at 20.41352 Hz)."""
-    half = shoot(job.problem, orbit.state, orbit.parameter, orbit.periods // 2)
-    return float(np.linalg.norm((half - orbit.state) / job.scales[:-1]))
-
-
 def _ended(job: _Continuation, new: _Point, last: _Point, before: np.ndarray | None, halves: list | None) -> str:
     """Why the branch ends at its new point ``new`` (after ``last``, itself after the
     scaled point ``before``), or an empty string: it steps back onto its own points
     (:data:`RETRACE`), or a period-``2k`` branch meets its period-``k`` orbit
-    (:func:`_half_distance`, appended to ``halves``)."""
+    (:func:`~camdyn.continuation.ends.half_distance`, appended to ``halves``)."""
     where = f"{job.problem.name} = {new.orbit.parameter:.9g}"
     back = before is not None and np.linalg.norm(new.z - before) < RETRACE * np.linalg.norm(last.z - before)
     job.retraced = job.retraced + 1 if back else 0
     if job.retraced >= 2:
         return f"the continuation stepped to and fro over its own points at {where}"
     if halves is not None:
-        halves.append(_half_distance(job, new.orbit))
+        halves.append(half_distance(job.problem, new.orbit, job.scales))
         if halves[-1] < END_FRACTION * max(halves):
             return f"the branch reached the period-{new.orbit.periods // 2} orbit (its period doubling) at {where}"
     return ""
+
+
+def _check_steps(step: float, min_step: float, max_step: float, max_points: int) -> None:
+    if not (0 < min_step <= step <= max_step):
+        raise ParameterError(f"steps must satisfy 0 < min_step <= step <= max_step, got {min_step}, {step}, "
+                             f"{max_step}")
+    if max_points < 2:
+        raise ParameterError(f"max_points must be at least 2, got {max_points}")
 
 
 def continuation_scales(orbit: Orbit) -> np.ndarray:
@@ -400,7 +399,8 @@ def continuation_scales(orbit: Orbit) -> np.ndarray:
 
 def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0.01, min_step: float = MIN_STEP,
                     max_step: float = 0.1, max_points: int = 500, tolerance: float = 1e-10,
-                    max_corrections: int = 15, progress: Callable[[Orbit], None] | None = None) -> Branch:
+                    max_corrections: int = 15, progress: Callable[[Orbit], None] | None = None,
+                    stall: int = 0) -> Branch:
     """Continue the orbit ``start`` in the problem's scalar parameter towards ``stop``.
 
     Parameters
@@ -426,16 +426,15 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         Corrector's convergence on the scaled Newton step.
     progress : callable, optional
         Called with each accepted orbit.
+    stall : int
+        End the branch when it stalls over its last ``stall`` points (0: never;
+        :func:`~camdyn.continuation.ends.stall_end`).
 
     Returns
     -------
     Branch
     """
-    if not (0 < min_step <= step <= max_step):
-        raise ParameterError(f"steps must satisfy 0 < min_step <= step <= max_step, got {min_step}, {step}, "
-                             f"{max_step}")
-    if max_points < 2:
-        raise ParameterError(f"max_points must be at least 2, got {max_points}")
+    _check_steps(step, min_step, max_step, max_points)
     lo, hi = sorted((start.parameter, float(stop)))
     if not hi > lo:
         raise ParameterError(f"stop must differ from the start {start.parameter}")
@@ -456,7 +455,7 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         progress(start)
     ds = step
     before = None                                              # the point before the last
-    halves = [_half_distance(job, start)] if start.periods % 2 == 0 and segments == 1 else None
+    halves = [half_distance(problem, start, scales)] if start.periods % 2 == 0 and segments == 1 else None
     while len(branch.orbits) < max_points:
         last_step = False
         target = point.z[-1] + ds * point.tangent[-1]
@@ -488,7 +487,7 @@ def continue_orbits(problem: Problem, start: Orbit, stop: float, step: float = 0
         branch.orbits.append(new.orbit)
         if progress:
             progress(new.orbit)
-        ended = _ended(job, new, point, before, halves)
+        ended = _ended(job, new, point, before, halves) or stall_end(branch.orbits, stall, hi - lo, problem)
         if ended:
             return Branch(branch.orbits, branch.bifurcations, ended)
         before, point = point.z, new

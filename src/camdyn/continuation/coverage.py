@@ -29,8 +29,8 @@ from camdyn.continuation.orbits import Orbit, find_orbit, shoot, transient_state
 from camdyn.continuation.problem import Problem
 from camdyn.errors import CamdynError, ParameterError
 
-__all__ = ["Coverage", "Gap", "MAX_PERIOD", "ROUNDS", "cover_range", "covered_branches", "coverage_summary",
-           "gap_records", "response_period"]
+__all__ = ["Coverage", "Gap", "MAX_PERIOD", "ROUNDS", "STALL_POINTS", "cover_range", "covered_branches",
+           "coverage_summary", "gap_records", "response_period"]
 
 #: Longest period, in forcing periods, that a restart looks for in its simulation [-].
 MAX_PERIOD = 8
@@ -46,6 +46,9 @@ SAME_POINT = 1e-3
 ROUNDS = 3
 #: Default jump past a branch's end to the next restart, as a fraction of the range [-].
 JUMP_FRACTION = 0.02
+#: The stall test of the branches a coverage traces
+#: (:func:`~camdyn.continuation.ends.stall_end`): their last this many points [-].
+STALL_POINTS = 15
 
 
 @dataclass(frozen=True)
@@ -223,7 +226,7 @@ def cover_range(problem: Problem, first_branch: Branch, start: float, stop: floa
         if progress:
             progress(found)
         back = continue_orbits(problem, found, front, step=step, max_step=max(step, 0.1), max_points=max_points,
-                               progress=progress)
+                               progress=progress, stall=STALL_POINTS)
         resumed = _front(back, -direction)
         if (resumed - front) * direction > 0:
             cover.gaps.append(Gap(front, resumed, reason))
@@ -233,7 +236,7 @@ def cover_range(problem: Problem, first_branch: Branch, start: float, stop: floa
         if len(back.orbits) > 1:
             cover.branches.append(back)
         on = continue_orbits(problem, found, stop, step=step, max_step=max(step, 0.1), max_points=max_points,
-                             progress=progress)
+                             progress=progress, stall=STALL_POINTS)
         cover.branches.append(on)
         front, reason = max(_front(on, direction) * direction, value * direction) * direction, on.stopped
     cover.stopped = cover.stopped or f"{problem.name} reached the end of its range"
@@ -258,7 +261,8 @@ def covered_branches(problem: Problem, branch: Branch, start: float, stop: float
         phase("the period-doubled branches")
     branches = list(coverage.branches)
     for covering in coverage.branches:
-        branches += switch_doublings(problem, covering, stop, doublings, step, max_points, progress=progress)
+        branches += switch_doublings(problem, covering, stop, doublings, step, max_points, progress=progress,
+                                     stall=STALL_POINTS if cover else 0)
     return coverage, branches
 
 

@@ -236,11 +236,13 @@ def mechanism_problem(rig, key: str | None = None, initial_state=None, static_fr
 
 def trace_mechanism(rig, key: str, start: float, stop: float, periods: int = 1, step: float = 0.02,
                     max_points: int = 200, transient: int = 50, rtol: float = 1e-10,
-                    progress: Callable[[Orbit], None] | None = None, segments: int = 1) -> tuple[Problem, Branch]:
+                    progress: Callable[[Orbit], None] | None = None, segments: int = 1,
+                    stall: int = 0) -> tuple[Problem, Branch]:
     """The branch of period-``periods`` orbits of a mechanism (:func:`mechanism_problem`)
     from ``key`` [SI unit] at ``start`` towards ``stop``: the orbit at ``start`` after
     ``transient`` cam periods (turns of the cam, for a cam under its drive) from the
-    static equilibrium and Newton's method, then pseudo-arclength continuation, as
+    static equilibrium and Newton's method, then pseudo-arclength continuation (``stall``
+    its stall test), as
     :func:`~camdyn.continuation.results.trace_branch` does for the cam-follower.
 
     Raises
@@ -265,5 +267,5 @@ def trace_mechanism(rig, key: str, start: float, stop: float, periods: int = 1, 
                               "the drive must keep it turning forward against the load, and a loss that grows with "
                               "the speed, such as drive.bearing_viscous, must balance a constant torque)") from None
     branch = continue_orbits(problem, orbit, stop, step=step, max_step=max(step, 0.1), max_points=max_points,
-                             progress=progress)
+                             progress=progress, stall=stall)
     return problem, branch

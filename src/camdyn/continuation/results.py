@@ -76,13 +76,15 @@ def parameter_value(key: str, value, name: str = "value") -> float:
 
 def trace_branch(system: System, key: str, start: float, stop: float, periods: int = 1, step: float = 0.02,
                  max_points: int = 200, transient: int = 50, rtol: float = 1e-10,
-                 progress: Callable[[Orbit], None] | None = None, segments: int = 1) -> tuple[Problem, Branch]:
+                 progress: Callable[[Orbit], None] | None = None, segments: int = 1,
+                 stall: int = 0) -> tuple[Problem, Branch]:
     """The branch of period-``periods`` orbits of ``system`` (or the preset it names)
     from the parameter ``key`` [SI unit, or text with a unit such as ``"5 Hz"``] at
     ``start`` towards ``stop``: the orbit at ``start`` from a transient of
     ``transient`` forcing periods and Newton's method, then pseudo-arclength continuation
-    (:func:`~camdyn.continuation.branches.continue_orbits`, steps in scaled units), by
-    multiple shooting over ``segments`` segments when more than 1.
+    (:func:`~camdyn.continuation.branches.continue_orbits`, steps in scaled units, and
+    ``stall`` its stall test), by multiple shooting over ``segments`` segments when more
+    than 1.
 
     Raises
     ------
@@ -101,13 +103,13 @@ def trace_branch(system: System, key: str, start: float, stop: float, periods: i
     problem.build(stop)                                       # refuse an end value the system cannot take
     orbit = find_orbit(problem, periods=int(periods), transient=transient, segments=int(segments))
     branch = continue_orbits(problem, orbit, stop, step=step, max_step=max(step, 0.1), max_points=max_points,
-                             progress=progress)
+                             progress=progress, stall=stall)
     return problem, branch
 
 
 def trace_model(bound, key: str | None, start, stop, periods: int = 1, step: float = 0.02, max_points: int = 200,
                 transient: int = 50, rtol: float = 1e-10, progress: Callable[[Orbit], None] | None = None,
-                segments: int = 1) -> tuple[Problem, Branch]:
+                segments: int = 1, stall: int = 0) -> tuple[Problem, Branch]:
     """:func:`trace_branch` for a model of the model protocol (``Model.bind()``): the
     branch in its parameter ``key`` (default its speed), ``start`` and ``stop`` numbers in
     the parameter's unit or text with units, through
@@ -128,18 +130,20 @@ def trace_model(bound, key: str | None, start, stop, periods: int = 1, step: flo
     problem.build(stop)                                       # refuse an end value the model cannot take
     orbit = find_orbit(problem, periods=int(periods), transient=transient, segments=int(segments))
     branch = continue_orbits(problem, orbit, stop, step=step, max_step=max(step, 0.1), max_points=max_points,
-                             progress=progress)
+                             progress=progress, stall=stall)
     return problem, branch
 
 
 def switch_doublings(problem: Problem, branch: Branch, stop: float, levels: int = 1, step: float = 0.02,
-                     max_points: int = 200, progress: Callable[[Orbit], None] | None = None) -> list[Branch]:
+                     max_points: int = 200, progress: Callable[[Orbit], None] | None = None,
+                     stall: int = 0) -> list[Branch]:
     """The period-doubled branches born on ``branch``: at each of its period doublings the
     period-``2k`` branch (:func:`~camdyn.continuation.switching.switch_branch`) continued
     towards ``stop``, and on those their own doublings, down to ``levels`` doublings
     (1: the period-2 branches only). A doubling whose switch fails (the corrector does
     not converge next to it) is skipped. Returns the new branches, parents first. For a
-    cam under its drive the first orbit is sought at :data:`AUTONOMOUS_AMPLITUDE`."""
+    cam under its drive the first orbit is sought at :data:`AUTONOMOUS_AMPLITUDE`;
+    ``stall`` as :func:`~camdyn.continuation.branches.continue_orbits` takes it."""
     if int(levels) != levels or levels < 0:
         raise ParameterError(f"the number of doublings to follow must be a whole number >= 0, got {levels}")
     found, parents = [], [branch]
@@ -152,7 +156,8 @@ def switch_doublings(problem: Problem, branch: Branch, stop: float, levels: int 
                 try:
                     amplitude = 1e-3 if problem.clock is None else AUTONOMOUS_AMPLITUDE
                     children.append(switch_branch(problem, item, stop, amplitude, step=step,
-                                                  max_step=max(step, 0.1), max_points=max_points, progress=progress))
+                                                  max_step=max(step, 0.1), max_points=max_points, progress=progress,
+                                                  stall=stall))
                 except CamdynError:
                     continue
         found.extend(children)

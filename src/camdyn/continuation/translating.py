@@ -107,12 +107,13 @@ def translating_problem(follower: TranslatingFollower, speed: float, phase: floa
 
 def trace_translating(follower: TranslatingFollower, start: float, stop: float, periods: int = 1, phase: float = 0.0,
                       step: float = 0.01, max_points: int = 200, transient: int = 100, rtol: float = 1e-10,
-                      progress: Callable[[Orbit], None] | None = None) -> tuple[Problem, Branch]:
+                      progress: Callable[[Orbit], None] | None = None, stall: int = 0) -> tuple[Problem, Branch]:
     """The branch of period-``periods`` orbits from the cam speed ``start`` towards
     ``stop`` (each in Hz, or text with units such as ``"700 rpm"``; the branch's parameter
     is omega [rad/s]): the orbit at ``start`` after ``transient`` revolutions from
     the follower resting on the cam (Newton's method on the shooting residual), then
-    pseudo-arclength continuation (:func:`~camdyn.continuation.branches.continue_orbits`).
+    pseudo-arclength continuation (:func:`~camdyn.continuation.branches.continue_orbits`,
+    ``stall`` its stall test).
 
     Raises
     ------
@@ -131,7 +132,7 @@ def trace_translating(follower: TranslatingFollower, start: float, stop: float, 
     problem = translating_problem(follower, f"{float(start)!r} rad/s", phase, rtol=rtol, atol=rtol * 1e-2)
     orbit = find_orbit(problem, periods=int(periods), transient=transient)
     branch = continue_orbits(problem, orbit, stop, step=step, max_step=max(step, 0.05), max_points=max_points,
-                             progress=progress)
+                             progress=progress, stall=stall)
     return problem, branch
 
 

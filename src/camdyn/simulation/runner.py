@@ -213,9 +213,10 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
     Warns
     -----
     TransientWarning
-        When the run's last cam period repeats none of the 8 before it (within 1e-3 of
-        ``alpha``'s range, :mod:`camdyn.simulation.settling`): its harmonics and extremes
-        then describe a transient, or a motion that is not periodic.
+        When a run of 9 cam periods or more has a last period that repeats none of the 8
+        before it (within 1e-3 of ``alpha``'s range, :mod:`camdyn.simulation.settling`):
+        its harmonics and extremes then describe a transient, or a motion that is not
+        periodic.
     """
     if isinstance(system, (Model, BoundModel)):   # a model of the model protocol
         if method != "auto" or variables is not None:

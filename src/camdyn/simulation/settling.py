@@ -73,9 +73,12 @@ def repeat(times: np.ndarray, values: np.ndarray, period: float,
 
 def check_settled(times: np.ndarray, values: np.ndarray, period: float, name: str, stacklevel: int = 3) -> None:
     """Warn (:class:`TransientWarning`) when the last cam period of the signal ``name``
-    repeats none of the :data:`MAX_PERIOD` before it (:func:`repeat`); nothing for a run
-    shorter than three cam periods or a cam at rest."""
-    if not (math.isfinite(period) and period > 0) or times.size < 3 or times[-1] - times[0] < 3 * period:
+    repeats none of the :data:`MAX_PERIOD` before it (:func:`repeat`); nothing for a cam
+    at rest or a run shorter than ``MAX_PERIOD + 1`` cam periods, too short to tell a
+    transient from an orbit of a longer period (a period-4 orbit simulated over its 4
+    cam periods)."""
+    if not (math.isfinite(period) and period > 0) or times.size < 3 \
+            or times[-1] - times[0] < (MAX_PERIOD + 1) * period * (1 - 1e-9):
         return
     k, difference = repeat(times, values, period)
     if k is None and math.isfinite(difference):
