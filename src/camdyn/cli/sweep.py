@@ -139,19 +139,16 @@ def lyapunov(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     """Largest Lyapunov exponent of the steady motion at one speed (two nearby trajectories
     through every impact, renormalised once per revolution); with --spectrum also the
     whole spectrum from the state-transition matrix, re-orthonormalised once per revolution,
-    and whether the two largest exponents agree within their standard errors."""
-    from camdyn.analysis.chaos import agreement, lyapunov_exponent
-    from camdyn.cli.common import load_source
+    and whether the two largest exponents agree within their standard errors. Every
+    family at a prescribed cam speed: the thesis's follower, the translating follower,
+    the flexible pivot and two followers held at their speed, a model of your own
+    (FILE.py:NAME)."""
+    from camdyn.analysis.chaos import agreement
     from camdyn.params.units import parse_speed
 
-    system = load_source(source, set_)
     hz = parse_speed(speed)
-    result = lyapunov_exponent(system, speed=hz, revolutions=revolutions, transient=transient)
+    result, full = _lyapunov(source, set_, hz, revolutions, transient, spectrum)
     half = result.running[revolutions // 2 - 1] if revolutions >= 2 else float("nan")
-    full = None
-    if spectrum:
-        from camdyn.analysis.lyapunov import lyapunov_spectrum
-        full = lyapunov_spectrum(system, speed=hz, revolutions=revolutions, transient=transient)
     agree, verdict_text = agreement(result, full) if full is not None else (None, "")
     if json_:
         summary = {"speed_hz": result.speed, "exponent_per_s": result.exponent,
@@ -178,3 +175,27 @@ def lyapunov(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                       f"{full.total:.4g} 1/s; Kaplan-Yorke dimension {full.kaplan_yorke_dimension:.3g}",
                       highlight=False, soft_wrap=True)
         console.print(verdict_text, highlight=False, soft_wrap=True)
+
+
+def _lyapunov(source, set_, hz: float, revolutions: int, transient: int, spectrum: bool):
+    """``(largest exponent, spectrum or None)`` of the configuration ``source`` at ``hz``
+    [Hz]: the thesis's follower by its own compiled estimate, any other family through its
+    periodic problem (:mod:`camdyn.continuation.lyapunov`)."""
+    from camdyn.params.config import parse_assignments
+    from camdyn.systems.families import family_of
+
+    if family_of(source) == "cam-follower":
+        from camdyn.analysis.chaos import lyapunov_exponent
+        from camdyn.analysis.lyapunov import lyapunov_spectrum
+        from camdyn.cli.common import load_source
+
+        system = load_source(source, set_)
+        result = lyapunov_exponent(system, speed=hz, revolutions=revolutions, transient=transient)
+        full = lyapunov_spectrum(system, speed=hz, revolutions=revolutions, transient=transient) if spectrum else None
+        return result, full
+    from camdyn.continuation.lyapunov import orbit_lyapunov, orbit_spectrum
+    from camdyn.continuation.sources import source_problem
+
+    problem = source_problem(source, parse_assignments(set_), hz)
+    result = orbit_lyapunov(problem, revolutions=revolutions, transient=transient)
+    return result, (orbit_spectrum(problem, revolutions=revolutions, transient=transient) if spectrum else None)

@@ -30,7 +30,7 @@ from camdyn.integrator import driver
 from camdyn.simulation import limits
 from camdyn.systems import registry as systems
 
-__all__ = ["Flow", "Orbit", "flow", "find_orbit", "make_orbit", "segment_ends",
+__all__ = ["Flow", "Orbit", "driver_settings", "flow", "find_orbit", "make_orbit", "segment_ends",
            "segment_runs", "shoot", "transient_state", "STABILITY_MARGIN"]
 
 #: A multiplier counts as inside the unit circle when its modulus is below 1 - this [-].
@@ -173,7 +173,7 @@ def _full(problem: Problem, x: np.ndarray, value: float) -> np.ndarray:
     return problem.full_state(x, value)
 
 
-def _driver_settings(problem: Problem, period: float, max_steps: int = 50_000_000) -> tuple:
+def driver_settings(problem: Problem, period: float, max_steps: int = 50_000_000) -> tuple:
     """The driver's arguments after the tolerances for the problem's model forced with
     period ``period`` [s]: the largest step [s] and the scan interval [s] of
     :func:`~camdyn.simulation.limits.step_limits`, DOP853, the limits on steps and
@@ -207,7 +207,7 @@ def _variational(problem: Problem, p, period, x, value, t0, t1, samples, max_ste
     start = np.concatenate([y0, np.eye(n).ravel()])
     rtol, atol = problem.matrix_tolerances()
     y, modes, log, counters = problem.run(systems.VARIATIONAL + problem.system_id, p, start, t0, t1,
-                                          times, rtol, atol, *_driver_settings(problem, period, max_steps))
+                                          times, rtol, atol, *driver_settings(problem, period, max_steps))
     limits.check_run(counters, f"shooting run at {problem.name} = {value:g}")
     on_contact = log[:, driver.EVENT_GUARD] == 0
     if not problem.impacts:
@@ -248,7 +248,7 @@ def shoot(problem: Problem, x, value: float, periods: int = 1) -> np.ndarray:
 def _plain(problem: Problem, p, period, x, value, t0, t1) -> np.ndarray:
     y, _, _, counters = problem.run(problem.system_id, p, _full(problem, x, value), t0, t1,
                                     np.array([t1]), problem.rtol, problem.atol,
-                                    *_driver_settings(problem, period))
+                                    *driver_settings(problem, period))
     limits.check_run(counters, f"shooting run at {problem.name} = {value:g}")
     return y[-1, :problem.unknowns].copy()
 
@@ -265,7 +265,7 @@ def transient_state(problem: Problem, periods: int = 50, value: float | None = N
     t1 = t0 + periods * period
     start = problem.full_state(problem.template[:problem.unknowns], value)
     y, _, _, counters = problem.run(problem.system_id, p, start, t0, t1, np.array([t1]),
-                                    problem.rtol * 100, problem.atol * 100, *_driver_settings(problem, period))
+                                    problem.rtol * 100, problem.atol * 100, *driver_settings(problem, period))
     limits.check_run(counters, "transient run")
     return y[-1, :problem.unknowns].copy()
 
@@ -391,7 +391,7 @@ def _segment_starts(problem: Problem, start, value: float, times: np.ndarray, tr
         return states.copy()
     p, period = problem.build(value)
     y, _, _, counters = problem.run(problem.system_id, p, _full(problem, states, value), times[0], times[-1],
-                                    times[:-1].copy(), problem.rtol, problem.atol, *_driver_settings(problem, period))
+                                    times[:-1].copy(), problem.rtol, problem.atol, *driver_settings(problem, period))
     limits.check_run(counters, "run to the segments' starts")
     return y[:, :u].copy()
 
