@@ -23,9 +23,9 @@ import pytest
 from test_continuation import _closed_form_multipliers, _impact_orbit, _rigid
 
 from camdyn.analysis.chaos import START_ALLOWANCE
+from camdyn.cli.problems import source_problem
 from camdyn.continuation import find_orbit, model_problem
 from camdyn.continuation.lyapunov import orbit_lyapunov, orbit_spectrum
-from camdyn.continuation.sources import source_problem
 from camdyn.errors import ParameterError
 from camdyn.systems import registry as systems
 

@@ -193,8 +193,8 @@ def _lyapunov(source, set_, hz: float, revolutions: int, transient: int, spectru
         result = lyapunov_exponent(system, speed=hz, revolutions=revolutions, transient=transient)
         full = lyapunov_spectrum(system, speed=hz, revolutions=revolutions, transient=transient) if spectrum else None
         return result, full
+    from camdyn.cli.problems import source_problem
     from camdyn.continuation.lyapunov import orbit_lyapunov, orbit_spectrum
-    from camdyn.continuation.sources import source_problem
 
     problem = source_problem(source, parse_assignments(set_), hz)
     result = orbit_lyapunov(problem, revolutions=revolutions, transient=transient)

@@ -1,8 +1,9 @@
 """The periodic problem of a configuration of any family, given by its preset's name or
-file, at a cam speed: what the steady-state analyses that need only a
-:class:`~camdyn.continuation.problem.Problem` (Lyapunov exponents,
+file, at a cam speed: what the commands whose analysis needs only a
+:class:`~camdyn.continuation.problem.Problem` (``camdyn lyapunov`` through
 :mod:`camdyn.continuation.lyapunov`) take, whatever the family
-(:func:`camdyn.systems.families.family_of` tells the families apart).
+(:func:`camdyn.systems.families.family_of` tells the families apart). It reads files
+(:mod:`camdyn.io`), which the physics packages do not, so it lives with the command line.
 """
 
 from __future__ import annotations
