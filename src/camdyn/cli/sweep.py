@@ -18,6 +18,7 @@ from camdyn.cli.common import (
     parse_grid,
 )
 from camdyn.cli.outputs import announce, check_outputs, emit_json
+from camdyn.errors import ParameterError
 from camdyn.sweeps.metrics import REGIMES
 
 
@@ -96,13 +97,17 @@ def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                 force: bool = ForceOption,
                 quiet: bool = typer.Option(False, "--quiet", help="No progress bar.")):
     """Bifurcation diagram over cam speed: Poincare samples once per revolution, impacts per
-    revolution, period and regime (a sweep; see 'camdyn sweep' for the general form). For a
-    translating follower (preset alzate, or [follower] kind = "translating"): its state at
-    cam angle 0 of each revolution after --discard, in one process (docs/profiles.md)."""
+    revolution, period and regime (a sweep; see 'camdyn sweep' for the general form). A
+    mechanism held at its speed (the flexible pivot, two followers with a prescribed drive)
+    is swept in system.motion.speed, a model of your own (FILE.py:NAME) in its speed, with
+    their own metrics. For a translating follower (preset alzate, or [follower] kind =
+    "translating"): its state at cam angle 0 of each revolution after --discard, in one
+    process (docs/profiles.md)."""
     from camdyn.params.config import parse_assignments
     from camdyn.params.profiles import is_translating
     from camdyn.plotting import plot_sweep
     from camdyn.sweeps import run_sweep, spec_from_dict
+    from camdyn.sweeps.families import family_of as sweep_family
 
     check_outputs(netcdf=out, figure=plot or out.with_suffix(".png"), force=force)
     if is_translating(source):
@@ -110,10 +115,14 @@ def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
         bifurcation_translating_command(source, set_, speeds, revolutions, discard, out, plot, workers, dask, quiet)
         return
     grid = parse_grid(speeds, "--speeds", "Hz")
+    family = sweep_family(source, parse_assignments(set_), Path.cwd())
+    if not family.speed_key:
+        raise ParameterError(f"{source}: its drive turns the cam, whose speed is the run's: vary a drive key "
+                             "with camdyn sweep instead (docs/sweeps.md)")
     table = {"system": {"source": source, "set": parse_assignments(set_)},
-             "vary": [{"key": "motion.speed", "values": [float(v) for v in grid]}],
+             "vary": [{"key": family.speed_key, "values": [float(v) for v in grid]}],
              "run": {"revolutions": revolutions, "discard": discard},
-             "metrics": {"names": ["poincare", "impacts", "regime", "residual", "max_force"]},
+             "metrics": {"names": list(family.diagram_metrics)},
              "output": {"path": str(out)}}
     spec = spec_from_dict(table, name=out.stem)
     from camdyn.sweeps.execution import check_dask_address
@@ -123,8 +132,9 @@ def bifurcation(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     ds = run_sweep(spec, workers=workers, dask=dask, progress=not quiet, restart=restart, echo=_echo)
     announce(out)
     announce(plot_sweep(ds, plot or out.with_suffix(".png")))
-    counts = {name: int((ds.regime == code).sum()) for code, name in REGIMES.items()}
-    _echo("regimes: " + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
+    if "regime" in ds:
+        counts = {name: int((ds.regime == code).sum()) for code, name in REGIMES.items()}
+        _echo("regimes: " + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
     ds.close()
 
 

@@ -75,6 +75,9 @@ class Family:
     runner : the module that runs the points in Python (empty: the compiled kernel).
     atol : whether ``[run] atol`` may be given.
     base : the base system of the rocking cam-follower (None for the others).
+    speed_key : the key of the cam's speed [Hz], the axis of a bifurcation diagram (empty
+        where the drive sets the speed: a cam under its drive).
+    diagram_metrics : the metrics a bifurcation diagram keeps.
     """
 
     source: str
@@ -88,6 +91,8 @@ class Family:
     runner: str = ""
     atol: bool = True
     base: object = None
+    speed_key: str = "motion.speed"
+    diagram_metrics: tuple = ("poincare", "impacts", "regime", "residual", "max_force")
 
 
 def family_of(source: str, overrides: dict, base_dir: Path) -> Family:
@@ -103,7 +108,8 @@ def family_of(source: str, overrides: dict, base_dir: Path) -> Family:
                       key_unit=model_run.key_unit(source),
                       check_values=lambda vary: model_run.check_values(source, overrides, vary),
                       metrics=model_run.METRICS, default_metrics=tuple(model_run.METRICS),
-                      run_defaults=model_run.RUN_DEFAULTS, runner="camdyn.sweeps.model_run")
+                      run_defaults=model_run.RUN_DEFAULTS, runner="camdyn.sweeps.model_run",
+                      speed_key=model_run.speed_key(source), diagram_metrics=("poincare", "events", "period"))
     if source.endswith(".toml") and not Path(source).is_absolute():
         source = str(base_dir / source)
     if is_mechanism(source):
@@ -112,7 +118,9 @@ def family_of(source: str, overrides: dict, base_dir: Path) -> Family:
         return Family(source=source, text=text, key_unit=mechanism_spec.key_unit,
                       check_values=lambda vary: mechanism_spec.check_values(source, overrides, vary),
                       metrics=mechanism_spec.MECHANISM_METRICS, default_metrics=mechanism_spec.KIND_METRICS[kind],
-                      run_defaults=_MECHANISM_RUN, kind=kind, runner="camdyn.sweeps.mechanism_run", atol=False)
+                      run_defaults=_MECHANISM_RUN, kind=kind, runner="camdyn.sweeps.mechanism_run", atol=False,
+                      speed_key="" if mechanism_spec.drive_sets_speed(text) else "system.motion.speed",
+                      diagram_metrics=("poincare", "impacts", "regime", "max_force"))
     text = system_to_toml(load_system(source, overrides))
     base = system_from_toml(text)
     return Family(source=source, text=text, key_unit=_rocking_key,

@@ -30,8 +30,7 @@ from camdyn.params.config import SCHEMA as SYSTEM_SCHEMA
 from camdyn.params.config import convert_value
 
 __all__ = ["MECHANISM_METRICS", "KIND_METRICS", "key_unit", "override_text", "point_mechanism", "check_mechanism",
-           "base_mechanism",
-           "check_values"]
+           "base_mechanism", "check_values", "drive_sets_speed"]
 
 #: metric name -> what it adds to the result of a sweep over a mechanism
 MECHANISM_METRICS = {
@@ -142,6 +141,17 @@ def base_mechanism(source: str, overrides: dict) -> tuple[str, str]:
     except CamdynError as exc:
         raise ParameterError(f"sweep spec: the base mechanism {source}: {exc}") from None
     return mechanism.spec.kind, mechanism_to_toml(mechanism)
+
+
+def drive_sets_speed(text: str) -> bool:
+    """Whether the mechanism written as TOML ``text`` (:func:`base_mechanism`) has its cam
+    turned by a drive (a torque, a motor, a controller), so that the cam's speed is the
+    run's, not a key to vary; a mechanism with no ``[drive]`` or a prescribed one holds
+    its system's ``motion.speed``."""
+    import tomllib
+
+    drive = tomllib.loads(text).get("drive")
+    return drive is not None and drive.get("kind", "constant") != "prescribed"
 
 
 def check_values(source: str, overrides: dict, vary) -> None:

@@ -27,7 +27,7 @@ from camdyn.sweeps.metrics import poincare_period
 
 __all__ = ["METRICS", "RUN_DEFAULTS", "STATUS_OK", "STATUS_REFUSED", "STATUS_SOLVER", "absolute_source",
            "base_text", "check_values", "definitions", "finish", "key_unit", "prepare_chunk", "run_args",
-           "run_chunk", "variables"]
+           "run_chunk", "speed_key", "variables"]
 
 
 #: metric name -> what it adds to the result of a sweep over a protocol model
@@ -49,6 +49,11 @@ def _model(source: str):
     from camdyn.systems.model_files import load_model
 
     return load_model(source)
+
+
+def speed_key(source: str) -> str:
+    """The model's speed parameter [Hz] (empty if it names none)."""
+    return _model(source).speed or ""
 
 
 def absolute_source(source: str, base_dir: Path) -> str:
