@@ -155,7 +155,7 @@ def test_camdyn_spectrum_on_a_mechanism_file_per_follower():
     ([BRAKE, "--follower", "3"], "--follower: the two-followers mechanism has 2 followers, got 3"),
     ([BRAKE, "--plot", "x.png"], "--plot draws one follower's spectrum: give --follower 1 or 2"),
     ([PIVOT, "--follower", "2"], "--follower: the flexible-pivot mechanism has 1 follower, got 2"),
-    (["sundar2014-friction", "--follower", "2"], "--follower: a cam-follower has one follower, got 2"),
+    (["sundar2014-friction", "--follower", "2"], "--follower: sundar2014-friction has one follower, got 2"),
     ([BRAKE, "--variable", "Nx"], "--variable must be a time series of the result"),
 ])
 def test_camdyn_spectrum_refuses_a_bad_follower_in_one_line(arguments, message, capsys):

@@ -113,7 +113,9 @@ def spectrum(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                                                             "a mechanism's starting speed)."),
              revolutions: float = typer.Option(40.0, help="Cam periods simulated (of the starting speed)."),
              window: int = typer.Option(20, help="Whole revolutions at the end analysed (Hann window)."),
-             variable: str = typer.Option("alpha_ddot", help="alpha_ddot, alpha, Fn, Ff, Nx, Ny, cam_speed, ..."),
+             variable: Optional[str] = typer.Option(None, help="alpha_ddot (the default where the model has it; "
+                                                                 "else its first time series), alpha, Fn, Ff, Nx, "
+                                                                 "Ny, cam_speed, ..."),
              follower: Optional[int] = typer.Option(None, help="Of two followers on one cam, the one analysed "
                                                                "(1 or 2; default both)."),
              sample_rate: str = typer.Option("20kHz", help="Output sample rate."),
@@ -124,13 +126,16 @@ def spectrum(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              json_: bool = JsonOption):
     """Amplitude spectrum of a simulated response: cam harmonics, resonance peaks and the
     linearized natural frequency. A mechanism file (docs/mechanisms.md) is analysed per
-    follower."""
+    follower; a follower on a cam profile and a model of your own (FILE.py:NAME) in any
+    of their time series."""
     from camdyn.analysis.spectra import spectrum_summary
     from camdyn.plotting import plot_spectrum
 
     check_outputs(figure=plot, force=force)
     runs = _spectrum_runs(source, set_, speed, revolutions, sample_rate, follower, window, plot is not None)
     summaries = []
+    series = [k for k in runs[0][1].data_vars if runs[0][1][k].dims == ("time",)]
+    variable = variable or ("alpha_ddot" if "alpha_ddot" in series else series[0])
     for number, ds in runs:
         if variable not in ds or ds[variable].dims != ("time",):
             raise ParameterError(f"--variable must be a time series of the result, one of "
@@ -158,24 +163,19 @@ def _spectrum_runs(source: str, assignments, speed, revolutions: float, sample_r
     from camdyn.analysis.spectra import follower_series
     from camdyn.cli.common import parse_hertz
     from camdyn.params.mechanism import is_mechanism
-    from camdyn.systems.model_files import is_model_reference
 
     rate = parse_hertz(sample_rate)
-    if is_model_reference(source):   # a model of the model protocol: its own run, any of its channels
-        from camdyn.params.config import parse_assignments
-        from camdyn.simulation.models import simulate_model
-        from camdyn.systems.model_files import load_model
-
-        if follower not in (None, 1):
-            raise ParameterError(f"--follower: a model of your own is one run, got {follower}")
-        bound = load_model(source).bind(parse_assignments(assignments))
-        return [(None, simulate_model(bound, speed=speed, revolutions=revolutions, sample_rate=rate))]
     if not is_mechanism(source):
         if follower not in (None, 1):
-            raise ParameterError(f"--follower: a cam-follower has one follower, got {follower}")
-        from camdyn.simulation.runner import simulate
-        return [(None, simulate(load_source(source, assignments), speed=speed, revolutions=revolutions,
-                                sample_rate=rate))]
+            raise ParameterError(f"--follower: {source} has one follower, got {follower}")
+        from camdyn.io.sources import simulate_source
+        from camdyn.params.config import parse_assignments
+
+        ds = simulate_source(source, parse_assignments(assignments), speed, revolutions, rate)
+        if ds is None:                # the thesis's follower
+            from camdyn.simulation.runner import simulate
+            ds = simulate(load_source(source, assignments), speed=speed, revolutions=revolutions, sample_rate=rate)
+        return [(None, ds)]
     from camdyn.cli.mechanism import DEFAULT_RTOL
     from camdyn.io.mechanism_config import load_mechanism, simulate_mechanism
     from camdyn.params.config import parse_assignments
