@@ -129,6 +129,7 @@ class DirectImpactEstimate:
             "correlation": self.correlation, "correlation_at_peak": self.correlation_at_peak,
             "identifiable": self.identifiable, "diagnosis": self.diagnosis,
             "rms_residual": self.rms_residual, "impacts_used": self.impacts_used, "records": self.records,
+            "iterations": self.iterations,
             "per_impact": {k: np.asarray(v).tolist() for k, v in self.per_impact.items()},
         }
 
