@@ -19,8 +19,10 @@ doi:10.1109/TRO.2011.2165310, written for Hunt-Crossley contacts):
    and second integrals of ``alpha_ddot`` from the window's start; ``delta_dot = -chi
    alpha_dot - n.v_cam``, docs/model.md §2, the cam's part constant over the impact).
    The two anchors ``d`` [m] and ``v`` [m/s] of each impact (where contact starts, and at
-   what approach velocity) are fitted with the impact's own damping coefficient, so that
-   the penetration is zero at the contact onset and the force there follows Hertz.
+   what approach velocity), and the cam's normal acceleration over it, are fitted with the
+   impact's own damping coefficient, so that the penetration is zero at the contact onset
+   and the force there follows Hertz (:mod:`camdyn.identification.impact_anchors`: all
+   impacts' Levenberg-Marquardt steps taken together).
 4. **Regression.** With the penetrations fixed, ``Fn - K delta^1.5 = beta delta^n
    delta_dot`` is linear in ``beta`` (and in ``K`` when it is fitted), solved by least
    squares at each ``n``; ``n`` minimises the residual (a bounded one-dimensional search,
@@ -42,9 +44,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 from scipy.integrate import cumulative_simpson
-from scipy.optimize import least_squares
 
 from camdyn.errors import IdentificationError, ParameterError
+from camdyn.identification.impact_anchors import PaddedImpacts, fit_anchors
 from camdyn.identification.impact_events import detect_contacts
 from camdyn.identification.impact_regression import EXPONENT_RANGE, ForceRegression, interval_95, per_impact_table
 from camdyn.model import layout as L
@@ -282,49 +284,6 @@ def _initial_anchors(s: ImpactSamples) -> np.ndarray:
     return x
 
 
-def _fit_anchors(s: ImpactSamples, exponent: float, anchors: np.ndarray, damping: float) -> np.ndarray:
-    """Anchors ``(d, v)`` of every impact, each fitted with its own damping coefficient at
-    ``exponent`` (step 3): one Levenberg-Marquardt solve, the impacts' blocks independent."""
-    e = s.elastic_exponent
-    count = s.count
-    scale = np.array([1e-6, 1e-2, 10.0, 1.0])
-    P = scale.size
-
-    def residual(x):
-        out = []
-        for k in range(count):
-            d, v, a, c = x[P * k:P * k + P] * scale
-            delta, rate = penetration(s, k, d, v, a)
-            pos = np.maximum(delta, 0.0)
-            out.append(s.stiffness[k] * pos ** e + c * damping * pos ** exponent * rate - s.force[k])
-        return np.concatenate(out)
-
-    def jacobian(x):
-        rows = sum(f.size for f in s.force)
-        jac = np.zeros((rows, P * count))
-        r = 0
-        for k in range(count):
-            d, v, a, c = x[P * k:P * k + P] * scale
-            delta, rate = penetration(s, k, d, v, a)
-            on = delta > 0
-            pos = np.where(on, delta, 0.0)
-            dfd = np.where(on, e * s.stiffness[k] * pos ** (e - 1) + c * damping * exponent
-                           * pos ** max(exponent - 1, 0.0) * rate, 0.0)
-            m = delta.size
-            dfv = c * damping * pos ** exponent
-            tk = s.offset[k]
-            jac[r:r + m, P * k] = dfd * scale[0]
-            jac[r:r + m, P * k + 1] = (dfd * tk + dfv) * scale[1]
-            jac[r:r + m, P * k + 2] = (dfd * 0.5 * tk * tk + dfv * tk) * scale[2]
-            jac[r:r + m, P * k + 3] = damping * pos ** exponent * rate * scale[3]
-            r += m
-        return jac
-
-    x0 = np.column_stack([anchors / scale[:3], np.ones(count)]).ravel()
-    sol = least_squares(residual, x0, jac=jacobian, method="lm", xtol=1e-10, ftol=1e-12, max_nfev=200)
-    return sol.x.reshape(count, P)[:, :3] * scale[:3]
-
-
 def estimate_impact_damping_direct(system, records, speed=None, runout=None, exponent: float | None = None,
                                    fit_stiffness: bool = False, min_contact_samples: int = 8,
                                    max_iterations: int = 30) -> DirectImpactEstimate:
@@ -389,6 +348,7 @@ def _merge(parts: list[ImpactSamples]) -> ImpactSamples:
 def _estimate(s: ImpactSamples, exponent, fit_stiffness, max_iterations, n_rec) -> DirectImpactEstimate:
     """Steps 3-4 alternated, then the intervals and the diagnostics."""
     anchors = _initial_anchors(s)
+    pad = PaddedImpacts(s)
     n_hat = 1.5 if exponent is None else float(exponent)
     beta = ForceRegression(s, anchors, fit_stiffness, penetration).solve(n_hat)[0][0]
     iterations = 0
@@ -396,7 +356,7 @@ def _estimate(s: ImpactSamples, exponent, fit_stiffness, max_iterations, n_rec) 
         iterations += 1
         # the peak's anchors are rough (the force peaks before the penetration does), and
         # the first beta may come out negative; each impact's own factor absorbs the sign
-        anchors = _fit_anchors(s, n_hat, anchors, abs(beta) if beta else 1.0)
+        anchors = fit_anchors(s, n_hat, anchors, abs(beta) if beta else 1.0, padded=pad)
         reg = ForceRegression(s, anchors, fit_stiffness, penetration)
         n_new = reg.best_exponent() if exponent is None else n_hat
         beta = reg.solve(n_new)[0][0]
