@@ -26,7 +26,8 @@ doi:10.1109/TRO.2011.2165310, written for Hunt-Crossley contacts):
 4. **Regression.** With the penetrations fixed, ``Fn - K delta^1.5 = beta delta^n
    delta_dot`` is linear in ``beta`` (and in ``K`` when it is fitted), solved by least
    squares at each ``n``; ``n`` minimises the residual (a bounded one-dimensional search,
-   variable projection). Steps 3-4 alternate until ``n`` settles.
+   variable projection). Steps 3-4 alternate until ``n`` settles; the alternation
+   converges linearly, so every third exponent is extrapolated by Aitken's method.
 
 Confidence intervals come from the impact-clustered (sandwich) covariance of the
 regression, which counts the errors every sample of one impact shares (its anchors);
@@ -345,13 +346,22 @@ def _merge(parts: list[ImpactSamples]) -> ImpactSamples:
                          contact_samples=arr("contact_samples"))
 
 
+def _aitken(n: list) -> float:
+    """Aitken's extrapolation of three successive exponents of the alternation [-] (it
+    converges linearly); the last one where the steps do not shrink geometrically."""
+    d1, d2 = n[1] - n[0], n[2] - n[1]
+    if d1 == 0 or not 0.0 < d2 / d1 < 0.95:
+        return n[2]
+    return float(np.clip(n[2] - d2 * d2 / (d2 - d1), *EXPONENT_RANGE))
+
+
 def _estimate(s: ImpactSamples, exponent, fit_stiffness, max_iterations, n_rec) -> DirectImpactEstimate:
     """Steps 3-4 alternated, then the intervals and the diagnostics."""
     anchors = _initial_anchors(s)
     pad = PaddedImpacts(s)
     n_hat = 1.5 if exponent is None else float(exponent)
     beta = ForceRegression(s, anchors, fit_stiffness, penetration).solve(n_hat)[0][0]
-    iterations = 0
+    iterations, history = 0, [n_hat]
     while iterations < max_iterations:
         iterations += 1
         # the peak's anchors are rough (the force peaks before the penetration does), and
@@ -361,7 +371,9 @@ def _estimate(s: ImpactSamples, exponent, fit_stiffness, max_iterations, n_rec) 
         n_new = reg.best_exponent() if exponent is None else n_hat
         beta = reg.solve(n_new)[0][0]
         done = abs(n_new - n_hat) < 1e-4
-        n_hat = n_new
+        history = [n_new] if done else history[-2:] + [n_new]
+        n_hat = _aitken(history) if len(history) == 3 else n_new
+        history = [n_hat] if n_hat != n_new else history
         if done:
             break
     coef, res = reg.solve(n_hat)
