@@ -17,8 +17,9 @@ of one forcing period.
   :mod:`camdyn.analysis.lyapunov`).
 
 The gap is measured in the scaled norm ``|D dx|``, ``D`` one over each state
-component's largest magnitude over the transient's last periods (by no less than a
-tenth of the largest's); each period starts at the problem's phase from the state the
+component's largest magnitude over the transient's last periods, sampled within them
+(by no less than a tenth of the largest's; a follower that rests on its cam's base
+circle at the section has no motion there to scale by); each period starts at the problem's phase from the state the
 period before ended in, its hybrid mode found again from the geometry. The rocking
 cam-follower of the thesis has its own compiled two-trajectory estimate
 (:func:`camdyn.analysis.chaos.lyapunov_exponent`).
@@ -40,7 +41,7 @@ from camdyn.simulation import limits
 __all__ = ["orbit_lyapunov", "orbit_spectrum", "MOST_SHRINK", "SCALE_SAMPLES"]
 
 #: Forcing periods at the end of the transient over which each state component's scale
-#: is taken [-].
+#: (its largest magnitude, sampled 64 times a period) is taken [-].
 SCALE_SAMPLES = 16
 #: Most the two trajectories' gap may shrink over one renormalisation interval [-].
 MOST_SHRINK = 100.0
@@ -105,12 +106,17 @@ def _start(problem: Problem, value: float | None, revolutions, transient) -> tup
     _, period = problem.build(value)
     x = transient_state(problem, transient, value) if transient else np.asarray(
         problem.template[:problem.unknowns], dtype=float).copy()
-    samples = [x]
     for _ in range(SCALE_SAMPLES - 1):
-        samples.append(shoot(problem, samples[-1], value, 1))
-    scale = np.max(np.abs(np.array(samples)), axis=0)
+        x = shoot(problem, x, value, 1)
+    p, _ = problem.build(value)
+    t0 = problem.t_start
+    times = t0 + period * np.arange(SCALE_SAMPLES * 64 + 1) / 64
+    states, _, _, counters = problem.run(problem.system_id, p, problem.full_state(x, value), t0, times[-1], times,
+                                         problem.rtol, problem.atol, *driver_settings(problem, period))
+    limits.check_run(counters, f"Lyapunov run at {problem.name} = {value:g}")
+    scale = np.max(np.abs(states[:, :problem.unknowns]), axis=0)     # over the motion, not only the section
     scale = np.maximum(scale, max(0.1 * scale.max(), 1e-300))
-    return value, period, samples[-1], 1.0 / scale, revolutions, transient
+    return value, period, states[-1, :problem.unknowns].copy(), 1.0 / scale, revolutions, transient
 
 
 def orbit_lyapunov(problem: Problem, value: float | None = None, revolutions: int = 400, transient: int = 200,
