@@ -63,21 +63,29 @@ def test_direct_text_table(transient_file):
         assert words in proc.stdout
 
 
-def test_residue_json_has_method_and_correlation(independent, tmp_path, capsys):
+@pytest.mark.parametrize("options", [["--fix-n", "1.5", "--bootstrap", "0"], ["--bootstrap", "8"]])
+def test_residue_json_has_method_and_correlation(independent, tmp_path, capsys, options):
     """The default method on the model's steady part (one impact per revolution) keeps
-    today's keys and adds ``method`` and ``correlation`` (null with n fixed)."""
+    today's keys and adds ``method`` and ``correlation``: null with n fixed, that of the
+    bootstrap replicates' beta and n with n free (positive: a larger n needs a larger
+    beta for the same damping at the peak, delta_peak < 1 m)."""
     t, channels, _ = independent
     keep = t >= 0.2
     path = tmp_path / "steady.nc"
     write_measurement(noisy_record(t[keep] - t[keep][0], {k: v[keep] for k, v in channels.items()}, 0.005), path)
-    assert main(["identify", "impact-damping", *RIG, str(path), "--fix-n", "1.5", "--bootstrap", "0", "--json"]) == 0
+    assert main(["identify", "impact-damping", *RIG, str(path), *options, "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     out = doc["summary"]
     for key in HEADLINE:
         assert key in out
     assert "confidence_95" in doc
-    assert out["method"] == "residue" and out["correlation"] is None
-    assert out["beta"] == pytest.approx(BETA, rel=0.05)
+    assert out["method"] == "residue"
+    if "--fix-n" in options:
+        assert out["correlation"] is None
+        assert out["beta"] == pytest.approx(BETA, rel=0.05)
+    else:
+        assert 0.0 < out["correlation"] <= 1.0
+        assert out["n"] == pytest.approx(N, rel=0.02)
 
 
 @pytest.mark.parametrize("options, words", [
