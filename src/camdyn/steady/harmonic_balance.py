@@ -27,6 +27,7 @@ imaginary parts are kept (NLvib's sorting) and the multipliers are ``exp(lambda 
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -37,7 +38,8 @@ from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.simulation import limits
 
-__all__ = ["HarmonicOrbit", "harmonic_balance", "hill_multipliers", "grid_size", "grid_values"]
+__all__ = ["HarmonicOrbit", "GridModel", "harmonic_balance", "harmonic_residual", "hill_multipliers", "grid_size",
+           "grid_values", "tail_measure", "resize"]
 
 
 @dataclass(frozen=True)
@@ -97,8 +99,9 @@ def grid_size(harmonics: int) -> int:
     return 1 << int(math.ceil(math.log2(8 * harmonics + 2)))
 
 
-def _bases(harmonics: int, count: int, omega: float):
-    """Synthesis E (N, 2H+1), projection P (2H+1, N) and derivative nabla (2H+1, 2H+1)."""
+@functools.lru_cache(maxsize=16)
+def _transforms(harmonics: int, count: int):
+    """Synthesis E (N, 2H+1) and projection P (2H+1, N), read-only (kept between calls)."""
     phase = 2.0 * math.pi * np.arange(count) / count
     k = np.arange(1, harmonics + 1)
     synth = np.empty((count, 2 * harmonics + 1))
@@ -107,10 +110,17 @@ def _bases(harmonics: int, count: int, omega: float):
     synth[:, 2::2] = np.sin(np.outer(phase, k))
     project = synth.T * (2.0 / count)
     project[0] *= 0.5
+    synth.flags.writeable = project.flags.writeable = False
+    return synth, project
+
+
+def _bases(harmonics: int, count: int, omega: float):
+    """Synthesis E (N, 2H+1), projection P (2H+1, N) and derivative nabla (2H+1, 2H+1)."""
+    synth, project = _transforms(harmonics, count)
+    k = np.arange(1, harmonics + 1)
     nabla = np.zeros((2 * harmonics + 1, 2 * harmonics + 1))
-    for h in k:                                                   # a'_k = k w b_k, b'_k = -k w a_k
-        nabla[2 * h - 1, 2 * h] = h * omega
-        nabla[2 * h, 2 * h - 1] = -h * omega
+    nabla[2 * k - 1, 2 * k] = k * omega                           # a'_k = k w b_k
+    nabla[2 * k, 2 * k - 1] = -k * omega                          # b'_k = -k w a_k
     return synth, project, nabla
 
 
@@ -126,13 +136,18 @@ def grid_values(rhs, jacobian, system, times, states, mode, p, rates, jacs):
         rates[j] = f
 
 
-class _Model:
+class GridModel:
     """The problem's rhs and Jacobian at every grid time, through its driver's compiled
-    registry (``problem.engine().systems``)."""
+    registry (``problem.engine().systems``), at the scalar parameter ``value`` [its unit].
 
-    def __init__(self, problem: Problem, value: float):
+    ``parameters``, if given, maps the parameter vector ``p`` built at ``value`` to the one
+    evaluated (the continuation's unclipped contact law)."""
+
+    def __init__(self, problem: Problem, value: float, parameters=None):
         self.problem, self.value = problem, value
         self.p, self.period = problem.build(value)
+        if parameters is not None:
+            self.p = parameters(self.p)
         self.systems = problem.engine().systems
         self.system = problem.system_id
         self.n = problem.template.size
@@ -170,21 +185,46 @@ class _Model:
         return changed
 
 
-def _newton(model: _Model, coefficients: np.ndarray, harmonics: int, tolerance: float, max_iterations: int):
+def harmonic_residual(model: GridModel, x: np.ndarray, harmonics: int, jacobian: bool = True):
+    """The frequency-domain residual and its exact Jacobian (None unless ``jacobian``) at the
+    coefficients ``x`` (u, 2H + 1) on the grid of :func:`grid_size` times.
+
+    Returns
+    -------
+    residual : ndarray (u (2H + 1),)
+        ``R = nabla X - P f(t_j, E X)`` (units of the state rates).
+    jacobian : ndarray (u (2H + 1), u (2H + 1))
+        ``dR/dX = nabla - P J E`` (rates per state unit).
+    times : ndarray (N,)
+        The grid times [s].
+    samples : ndarray (N, u)
+        The unknowns there (their units).
+    mode : ndarray
+        The hybrid mode at the first grid time.
+    """
     count = grid_size(harmonics)
     omega = 2.0 * math.pi / model.period
     synth, project, nabla = _bases(harmonics, count, omega)
     times = model.problem.t_start + model.period * np.arange(count) / count
     u, m = model.u, 2 * harmonics + 1
+    samples = (synth @ x.T)                                       # (N, u)
+    rates, jacs, mode = model.evaluate(times, samples)
+    residual = (x @ nabla.T - (project @ rates).T).ravel()        # R = nabla X - P f
+    if not jacobian:
+        return residual, None, times, samples, mode
+    # dR/dX[c j, d i] = nabla[j, i] delta_cd - sum_k P[j, k] J_k[c, d] E[k, i]
+    blocks = project @ (jacs.transpose(1, 2, 0)[:, :, :, None] * synth)   # (u, u, m, m): P J_cd E
+    jac = np.einsum("cd,ji->cjdi", np.eye(u), nabla) - blocks.transpose(0, 2, 1, 3)
+    return residual, jac.reshape(u * m, u * m), times, samples, mode
+
+
+def _newton(model: GridModel, coefficients: np.ndarray, harmonics: int, tolerance: float, max_iterations: int):
+    omega = 2.0 * math.pi / model.period
+    u, m = model.u, 2 * harmonics + 1
     x = coefficients.copy()
     step_norm = math.inf
     for iteration in range(max_iterations + 1):
-        samples = (synth @ x.T)                                   # (N, u)
-        rates, jacs, mode = model.evaluate(times, samples)
-        residual = (x @ nabla.T - (project @ rates).T).ravel()    # R = nabla X - P f
-        # dR/dX[c j, d i] = nabla[j, i] delta_cd - sum_k P[j, k] J_k[c, d] E[k, i]
-        jac = np.einsum("cd,ji->cjdi", np.eye(u), nabla) - np.einsum("jk,kcd,ki->cjdi", project, jacs, synth)
-        jac = jac.reshape(u * m, u * m)
+        residual, jac, times, samples, mode = harmonic_residual(model, x, harmonics)
         norm = float(np.max(np.abs(residual)))
         scale = max(float(np.max(np.abs(x))) * omega, 1e-300)
         if iteration > 0 and (norm <= tolerance * scale or step_norm <= 1e-14 * scale / omega):
@@ -209,27 +249,30 @@ def hill_multipliers(jacobian: np.ndarray, unknowns: int, period: float) -> tupl
     return kept[order], multipliers[order]
 
 
-def _tail(x: np.ndarray, harmonics: int) -> float:
+def tail_measure(x: np.ndarray, harmonics: int) -> float:
+    """The convergence measure of coefficients ``x`` (u, 2H + 1) [-]: the largest amplitude of
+    the harmonics ``k > 3H/4`` over the largest amplitude of harmonics ``k >= 1``."""
     amp = np.hypot(x[:, 1::2], x[:, 2::2])
     top = amp[:, int(math.floor(0.75 * harmonics)):]              # harmonics k > 3H/4
     largest = float(np.max(amp))
     return float(np.max(top)) / largest if largest > 0 else 0.0
 
 
-def _resize(x: np.ndarray, harmonics: int) -> np.ndarray:
+def resize(x: np.ndarray, harmonics: int) -> np.ndarray:
+    """Coefficients ``x`` (u, 2H' + 1) padded with zeros or cut to ``harmonics`` (their units)."""
     out = np.zeros((x.shape[0], 2 * harmonics + 1))
     m = min(x.shape[1], out.shape[1])
     out[:, :m] = x[:, :m]
     return out
 
 
-def _guess(model: _Model, harmonics: int, guess) -> np.ndarray:
+def _guess(model: GridModel, harmonics: int, guess) -> np.ndarray:
     if guess is not None:
         g = np.asarray(guess, float)
         if g.ndim == 2:
-            return _resize(g, harmonics)
-        return _resize(g.reshape(model.u, 1), harmonics)         # a constant state
-    return _resize(model.problem.template[:model.u].reshape(model.u, 1).astype(float), harmonics)
+            return resize(g, harmonics)
+        return resize(g.reshape(model.u, 1), harmonics)         # a constant state
+    return resize(model.problem.template[:model.u].reshape(model.u, 1).astype(float), harmonics)
 
 
 def harmonic_balance(problem: Problem, harmonics: int | str = "auto", guess=None, value: float | None = None,
@@ -257,7 +300,7 @@ def harmonic_balance(problem: Problem, harmonics: int | str = "auto", guess=None
         (:func:`camdyn.continuation.orbits.find_orbit`).
     """
     limits.check_number("tolerance", tolerance)
-    model = _Model(problem, problem.value if value is None else float(value))
+    model = GridModel(problem, problem.value if value is None else float(value))
     auto = harmonics == "auto"
     if not auto and (not isinstance(harmonics, int) or harmonics < 0):
         raise ParameterError(f"harmonics must be a non-negative integer or 'auto', got {harmonics!r}")
@@ -265,11 +308,11 @@ def harmonic_balance(problem: Problem, harmonics: int | str = "auto", guess=None
     x = _guess(model, h, guess)
     while True:
         x, times, samples, norm, iterations, jac, mode = _newton(model, x, h, tolerance, max_iterations)
-        tail = _tail(x, h)
+        tail = tail_measure(x, h)
         if not auto or tail <= tail_tolerance or 2 * h > max_harmonics:
             break
         h *= 2
-        x = _resize(x, h)
+        x = resize(x, h)
     changed = model.guard_changes(times, samples, mode)
     if changed:
         raise SimulationError(f"guard(s) {changed} change sign on the harmonic-balance orbit (contact lost or an "
