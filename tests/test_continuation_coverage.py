@@ -138,3 +138,12 @@ def test_a_bad_time_limit_is_refused_in_one_line(limit, capsys):
     assert main(["continue", "sundar2014-friction", "--from", "11Hz", "--to", "12Hz", "--max-time", limit]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("error:") and "--max-time" in err[0], err
+
+
+@pytest.mark.parametrize("source", ["rocking-roller", "rocking-friction"])
+def test_the_rocking_arm_on_a_profile_is_refused_with_the_reason(source, capsys):
+    from camdyn.cli.app import main
+
+    assert main(["continue", source, "--from", "10Hz", "--to", "10.1Hz"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no periodic problem" in err[0] and "camdyn simulate" in err[0], err

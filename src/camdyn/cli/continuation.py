@@ -46,9 +46,19 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                     max_points: int = typer.Option(200, help="Most orbits on the branch."),
                     transient: int = typer.Option(50, help="Cam periods simulated before the first orbit is "
                                                            "sought."),
-                    doublings: int = typer.Option(1, help="Period doublings followed: at each one located, "
-                                                          "switch onto the period-2k branch and continue it "
-                                                          "(0: none, 2: their doublings too)."),
+                    doublings: Optional[int] = typer.Option(None, help="Period doublings followed: at each one "
+                                                                       "located, switch onto the period-2k branch "
+                                                                       "and continue it (0: none, 2: their "
+                                                                       "doublings too; default 1)."),
+                    method: str = typer.Option("shooting", "--method",
+                                               help="shooting, or harmonic-balance (the rocking cam-follower's "
+                                                    "period-1 orbits in sustained contact: a frequency response "
+                                                    "that ends where contact is lost)."),
+                    harmonics: Optional[str] = typer.Option(None, "--harmonics",
+                                                            help="Harmonic balance: H, or auto (the default: "
+                                                                 "doubled where the top harmonics exceed 1e-8). "
+                                                                 "Shooting: cam harmonics per channel reported "
+                                                                 "(default 8)."),
                     brute_force: int = typer.Option(0, "--brute-force",
                                                     help="Draw the brute-force bifurcation diagram under the "
                                                          "branches in --plot: a sweep of this many values over "
@@ -77,6 +87,7 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     system key or, for the flexible pivot, pivot.stiffness or pivot.damping; a cam under
     its drive (its orbits on the section at its starting angle, their period unknown) in
     a drive key (drive.free_speed, drive.shaft_inertia, ...) or the cam's or followers'."""
+    from camdyn.cli.harmonic import harmonics_option, refuse_harmonic_balance
     from camdyn.continuation.coverage import STALL_POINTS, coverage_summary, covered_branches, gap_records
     from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset
 
@@ -85,6 +96,10 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
 
     if segments < 1:
         raise ParameterError(f"--segments must be at least 1, got {segments}")
+    count = harmonics_option(harmonics, method)
+    if method == "harmonic-balance":
+        refuse_harmonic_balance(source, period, segments, doublings is not None)
+    doublings = 1 if doublings is None else doublings
     if is_translating(source):
         if segments != 1:
             raise ParameterError("--segments is for the cam-follower; the translating follower is continued by "
@@ -102,13 +117,19 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     _check_settings(period, max_points, transient, step, doublings, brute_force, plot)
     bar = _Bar(quiet or (json_ and not err_console.is_terminal), parameter, unit, first, last,
                max_points * (1 + doublings))
+    if method == "harmonic-balance":
+        from camdyn.cli.harmonic import continue_harmonic_command
+        continue_harmonic_command(system, parameter, unit, first, last, count, step, max_points, plot, out,
+                                  lambda: _brute_force(source, set_, parameter, first, last, brute_force,
+                                                       quiet or json_), bar, json_)
+        return
     with bar:
         bar.phase(f"the first orbit ({transient} periods of transient, then Newton's method)")
         problem, branch = trace(system, parameter, first, last, period, step, max_points, transient,
                                 progress=bar.orbit, segments=segments, stall=STALL_POINTS if cover else 0)
         coverage, branches = covered_branches(problem, branch, first, last, step, max_points, transient, doublings,
                                               cover, limit, progress=bar.orbit, phase=bar.phase, segments=segments)
-    records = [branch_records(problem, b) for b in branches]
+    records = [branch_records(problem, b, count) for b in branches]
     gaps = gap_records(coverage)
     bifurcations = bifurcation_records(branches)
     files = []
@@ -205,8 +226,13 @@ def _load(source, set_, parameter, brute_force):
     from camdyn.continuation.results import trace_branch, trace_model
     from camdyn.params.config import parse_assignments
     from camdyn.params.mechanism import is_mechanism
+    from camdyn.systems.families import family_of
     from camdyn.systems.model_files import is_model_reference, load_model
 
+    if family_of(source) == "rocking":
+        raise ParameterError(f"{source}: a rocking roller or knife-edge arm on a profile has no periodic problem "
+                             "(shooting) in camdyn yet, so camdyn continue does not take it; camdyn simulate and "
+                             "camdyn spectrum do")
     if is_model_reference(source):
         if brute_force:
             raise ParameterError("--brute-force draws the cam-follower's diagram; for a model of your own run "
