@@ -9,6 +9,13 @@ from typing import List, Optional
 import typer
 
 from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, err_console, load_source
+from camdyn.cli.harmonic import (
+    DoublingsOption,
+    HarmonicsOption,
+    MethodOption,
+    continue_harmonic_command,
+    method_settings,
+)
 from camdyn.cli.outputs import announce, check_outputs, emit_json
 from camdyn.errors import ParameterError
 
@@ -46,19 +53,9 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
                     max_points: int = typer.Option(200, help="Most orbits on the branch."),
                     transient: int = typer.Option(50, help="Cam periods simulated before the first orbit is "
                                                            "sought."),
-                    doublings: Optional[int] = typer.Option(None, help="Period doublings followed: at each one "
-                                                                       "located, switch onto the period-2k branch "
-                                                                       "and continue it (0: none, 2: their "
-                                                                       "doublings too; default 1)."),
-                    method: str = typer.Option("shooting", "--method",
-                                               help="shooting, or harmonic-balance (the rocking cam-follower's "
-                                                    "period-1 orbits in sustained contact: a frequency response "
-                                                    "that ends where contact is lost)."),
-                    harmonics: Optional[str] = typer.Option(None, "--harmonics",
-                                                            help="Harmonic balance: H, or auto (the default: "
-                                                                 "doubled where the top harmonics exceed 1e-8). "
-                                                                 "Shooting: cam harmonics per channel reported "
-                                                                 "(default 8)."),
+                    doublings: Optional[int] = DoublingsOption,
+                    method: str = MethodOption,
+                    harmonics: Optional[str] = HarmonicsOption,
                     brute_force: int = typer.Option(0, "--brute-force",
                                                     help="Draw the brute-force bifurcation diagram under the "
                                                          "branches in --plot: a sweep of this many values over "
@@ -87,7 +84,6 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     system key or, for the flexible pivot, pivot.stiffness or pivot.damping; a cam under
     its drive (its orbits on the section at its starting angle, their period unknown) in
     a drive key (drive.free_speed, drive.shaft_inertia, ...) or the cam's or followers'."""
-    from camdyn.cli.harmonic import harmonics_option, refuse_harmonic_balance
     from camdyn.continuation.coverage import STALL_POINTS, coverage_summary, covered_branches, gap_records
     from camdyn.continuation.results import bifurcation_records, branch_records, branches_dataset
 
@@ -96,10 +92,7 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
 
     if segments < 1:
         raise ParameterError(f"--segments must be at least 1, got {segments}")
-    count = harmonics_option(harmonics, method)
-    if method == "harmonic-balance":
-        refuse_harmonic_balance(source, period, segments, doublings is not None)
-    doublings = 1 if doublings is None else doublings
+    count, doublings = method_settings(method, harmonics, source, period, segments, doublings)
     if is_translating(source):
         if segments != 1:
             raise ParameterError("--segments is for the cam-follower; the translating follower is continued by "
@@ -118,11 +111,9 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     bar = _Bar(quiet or (json_ and not err_console.is_terminal), parameter, unit, first, last,
                max_points * (1 + doublings))
     if method == "harmonic-balance":
-        from camdyn.cli.harmonic import continue_harmonic_command
-        continue_harmonic_command(system, parameter, unit, first, last, count, step, max_points, plot, out,
-                                  lambda: _brute_force(source, set_, parameter, first, last, brute_force,
-                                                       quiet or json_), bar, json_)
-        return
+        return continue_harmonic_command(system, parameter, unit, first, last, count, step, max_points, plot, out,
+                                         lambda: _brute_force(source, set_, parameter, first, last, brute_force,
+                                                              quiet or json_), bar, json_)
     with bar:
         bar.phase(f"the first orbit ({transient} periods of transient, then Newton's method)")
         problem, branch = trace(system, parameter, first, last, period, step, max_points, transient,

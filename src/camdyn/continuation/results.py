@@ -13,6 +13,7 @@ import xarray as xr
 from camdyn.continuation.branches import MIN_STEP, Branch, continue_orbits
 from camdyn.continuation.orbits import Orbit, find_orbit, shoot
 from camdyn.continuation.problem import Problem, system_problem
+from camdyn.continuation.spectra import HARMONIC_CHANNELS, cam_harmonics, channel_units
 from camdyn.continuation.switching import switch_branch
 from camdyn.errors import CamdynError, ParameterError
 from camdyn.model.equilibrium import as_system
@@ -26,6 +27,8 @@ from camdyn.simulation import limits
 #: above its tolerance (the residual's noise in the cam's speed, carried into the
 #: parameter's column by its central difference), and converged at 1e-2 [-].
 AUTONOMOUS_AMPLITUDE = 1e-2
+#: Cam harmonics per channel in a shooting orbit's record [-].
+HARMONICS = 8
 
 __all__ = ["check_trace_settings", "parameter_value", "trace_branch", "switch_doublings", "orbit_record",
            "branch_records", "bifurcation_records", "branches_dataset"]
@@ -175,7 +178,7 @@ def _sections(problem: Problem, orbit: Orbit) -> list[float]:
     return points
 
 
-def orbit_record(problem: Problem, orbit: Orbit) -> dict:
+def orbit_record(problem: Problem, orbit: Orbit, harmonics: int = HARMONICS) -> dict:
     """One orbit as a record: ``parameter`` [SI], ``stable``, ``multipliers`` ([re, im]
     pairs), ``period`` [s], ``periods`` (forcing periods per orbit period),
     ``impacts_per_period``, ``max_normal_force`` [N] and ``max_penetration`` [m] over the
@@ -184,14 +187,20 @@ def orbit_record(problem: Problem, orbit: Orbit) -> dict:
     ``min_normal_force`` [N] and ``min_sliding_velocity`` [m/s] (the contact-loss and
     sliding-reversal test functions; NaN for a test model), ``state`` (the unknowns at
     the phase ``t_start``) and ``poincare`` (the first unknown at each of the orbit's
-    forcing periods: its points on the stroboscopic section)."""
+    forcing periods: its points on the stroboscopic section), ``harmonics`` (the cam-follower's:
+    ``{channel: [amplitude of cam harmonic 1..harmonics]}`` of :data:`~.spectra.HARMONIC_CHANNELS`,
+    each in its channel's unit, by a DFT of the simulation's 512 samples per forcing period;
+    None for a test model)."""
     force = penetration = math.nan
+    spectra = None
     if problem.system is not None:
         from camdyn.simulation.runner import simulate
         system = problem.system.with_values(**{problem.key: orbit.parameter})
         ds = simulate(system, revolutions=orbit.periods, initial_state=orbit.state, rtol=problem.rtol,
                       atol=problem.atol, sample_rate=512.0 / orbit.period * orbit.periods,
-                      variables=["Fn", "penetration", "impact"])
+                      variables=["penetration", "impact", *HARMONIC_CHANNELS])
+        count = 512 * orbit.periods                            # one orbit period, the end point left out
+        spectra = {n: cam_harmonics(ds[n].values[:count], harmonics, orbit.periods) for n in HARMONIC_CHANNELS}
         # an impact's peak (tracked by the event log) falls between samples
         force = float(np.nanmax(np.r_[ds["Fn"].values, ds["impact_peak_force"].values]))
         penetration = float(np.nanmax(np.r_[ds["penetration"].values, ds["impact_peak_penetration"].values]))
@@ -200,7 +209,7 @@ def orbit_record(problem: Problem, orbit: Orbit) -> dict:
             "periods": orbit.periods, "impacts_per_period": orbit.impacts_per_period, "max_normal_force": force,
             "max_penetration": penetration, "min_normal_force": _finite(orbit.force_minimum),
             "min_sliding_velocity": _finite(orbit.sliding_minimum), "state": [float(v) for v in orbit.state],
-            "poincare": _sections(problem, orbit)}
+            "poincare": _sections(problem, orbit), "harmonics": spectra}
 
 
 def _finite(value: float) -> float | None:
@@ -208,9 +217,9 @@ def _finite(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-def branch_records(problem: Problem, branch: Branch) -> list[dict]:
-    """:func:`orbit_record` of every orbit of ``branch``."""
-    return [orbit_record(problem, orbit) for orbit in branch.orbits]
+def branch_records(problem: Problem, branch: Branch, harmonics: int = HARMONICS) -> list[dict]:
+    """:func:`orbit_record` of every orbit of ``branch``, ``harmonics`` cam harmonics per channel."""
+    return [orbit_record(problem, orbit, harmonics) for orbit in branch.orbits]
 
 
 def bifurcation_records(branches: list[Branch]) -> list[dict]:
@@ -220,11 +229,31 @@ def bifurcation_records(branches: list[Branch]) -> list[dict]:
             for index, branch in enumerate(branches) for b in branch.bifurcations]
 
 
-def branches_dataset(problem: Problem, records: list[list[dict]], bifurcations: list[dict]) -> xr.Dataset:
+def _harmonic_variables(points: list[dict]) -> dict:
+    """``harmonic_<channel>`` over ``(point, harmonic)`` [the channel's unit] from the
+    records' ``harmonics`` (NaN where a record has fewer or none); none without any."""
+    spectra = [r.get("harmonics") or {} for r in points]
+    names = list(dict.fromkeys(n for item in spectra for n in item))
+    if not names:
+        return {}
+    count = max(len(v) for item in spectra for v in item.values())
+    units, out = channel_units(names), {}
+    for name in names:
+        values = np.full((len(points), count), np.nan)
+        for i, item in enumerate(spectra):
+            values[i, :len(item.get(name, []))] = item.get(name, [])
+        out[f"harmonic_{name}"] = (("point", "harmonic"), values,
+                                   {"units": units[name], "long_name": f"amplitude of {name}'s cam harmonics 1..H"})
+    return out
+
+
+def branches_dataset(problem: Problem, records: list[list[dict]], bifurcations: list[dict],
+                     method: str = "single shooting, pseudo-arclength continuation") -> xr.Dataset:
     """The branches as a Dataset over ``point`` (all branches one after the other, with
     their index in ``branch``), ``multiplier``, ``section`` (an orbit's Poincare points,
-    NaN past its ``periods``) and ``bifurcation``; every variable carries ``units`` and
-    ``long_name``."""
+    NaN past its ``periods``), ``harmonic`` (the records' cam harmonics,
+    ``harmonic_<channel>``) and ``bifurcation``; every variable carries ``units`` and
+    ``long_name``; ``method`` names the method in the attributes."""
     points = [r for branch in records for r in branch]
     if not points:
         raise ParameterError("no orbit to store")
@@ -278,6 +307,7 @@ def branches_dataset(problem: Problem, records: list[list[dict]], bifurcations: 
         "bifurcation_branch": ("bifurcation", np.array([b["branch"] for b in bifurcations], dtype=np.int32),
                                {"units": "1", "long_name": "branch index"}),
     }
+    data.update(_harmonic_variables(points))
     return xr.Dataset(data, attrs={"parameter_name": problem.name, "parameter_units": unit,
-                                   "method": "single shooting, pseudo-arclength continuation",
+                                   "method": method,
                                    "rtol": problem.rtol, "atol": problem.atol})
