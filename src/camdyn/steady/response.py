@@ -197,10 +197,11 @@ class _Curve:
         return t if float(t @ previous) >= 0.0 else -t
 
     def correct(self, guess: np.ndarray, direction: np.ndarray, anchor: np.ndarray, previous: np.ndarray,
-                budget: int = CORRECTIONS, column: np.ndarray | None = None) -> _Point:
+                budget: int = CORRECTIONS, column: np.ndarray | None = None, hill: bool = True) -> _Point:
         """Newton on ``F(z) = 0`` and ``direction . (z - anchor) = 0`` from ``guess``, the
         parameter's column of the Jacobian from ``guess`` (or ``column``, the previous
-        point's) kept; the point's tangent oriented along ``previous``."""
+        point's) kept; the point's tangent oriented along ``previous``; its multipliers NaN
+        unless ``hill``."""
         z = guess.copy()
         column = self.column(z) if column is None else column
         for iteration in range(1, budget + 1):
@@ -210,10 +211,11 @@ class _Curve:
                 break
             z = z + step
             if np.max(np.abs(step)) <= self.tolerance:
-                return self.point(z, previous, iteration, jz, jac)
+                return self.point(z, previous, iteration, jz, jac, hill)
         raise SimulationError("the harmonic-balance corrector did not converge")
 
-    def point(self, z: np.ndarray, previous: np.ndarray, iterations: int, jz: np.ndarray, jac: np.ndarray) -> _Point:
+    def point(self, z: np.ndarray, previous: np.ndarray, iterations: int, jz: np.ndarray, jac: np.ndarray,
+              hill: bool = True) -> _Point:
         """The point at the converged ``z`` (``jz``, ``jac``: the Jacobians of its last
         Newton step): its tangent, Hill's
         multipliers, its residual at ``z`` (and the parameter's column by a forward
@@ -223,7 +225,8 @@ class _Curve:
         jz[:, -1] = self.column(z, residual)
         self.mode = mode
         period = self.problem.build(value)[1]
-        exponents, multipliers = hill_multipliers(jac, self.u, period)
+        nan = np.full(self.u, math.nan + 0j)
+        exponents, multipliers = hill_multipliers(jac, self.u, period) if hill else (nan, nan)
         harmonic = HarmonicOrbit(x, times, samples, period, self.harmonics, float(np.max(np.abs(residual))),
                                  iterations, tail_measure(x, self.harmonics), multipliers, exponents)
         return _Point(z, self.tangent(jz, previous), harmonic,
@@ -238,17 +241,31 @@ def _tests(point: _Point) -> dict[str, float]:
             "contact-loss": point.orbit.force_minimum}
 
 
-def _locate(curve: _Curve, a: _Point, b: _Point, kind: str, max_iterations: int = 30) -> _Point | None:
-    """The point between ``a`` and ``b`` where the test function ``kind`` is zero: the
-    secant (Illinois) on the arclength ``s`` from ``a`` along its tangent, each iterate
-    corrected on the plane ``t_a . (z - z_a - s t_a) = 0``."""
+def _locate(curve: _Curve, a: _Point, b: _Point, kind: str) -> _Point | None:
+    """The point between ``a`` and ``b`` where the test function ``kind`` is zero
+    (:func:`_secant`); a fold's or a contact loss's iterates skip Hill's eigenvalues, which
+    only the located point gets."""
+    hill = kind in ("period-doubling", "neimark-sacker")
+    c = _secant(curve, a, b, kind, hill)
+    if c is None or hill:
+        return c
+    axis = np.zeros(c.z.size)
+    axis[-1] = 1.0
+    return curve.correct(c.z, axis, c.z, c.tangent, column=c.column)
+
+
+def _secant(curve: _Curve, a: _Point, b: _Point, kind: str, hill: bool, max_iterations: int = 30) -> _Point | None:
+    """The secant (Illinois) on the arclength ``s`` from ``a`` along its tangent for the
+    zero of the test function ``kind`` between ``a`` and ``b``, each iterate corrected on
+    the plane ``t_a . (z - z_a - s t_a) = 0`` (multipliers only if ``hill``)."""
     fa, fb = _tests(a)[kind], _tests(b)[kind]
     sa, sb = 0.0, float(a.tangent @ (b.z - a.z))
     best, side = None, 0
     for _ in range(max_iterations):
         s = sb - fb * (sb - sa) / (fb - fa)
         try:
-            c = curve.correct(a.z + s * a.tangent, a.tangent, a.z + s * a.tangent, a.tangent, column=a.column)
+            c = curve.correct(a.z + s * a.tangent, a.tangent, a.z + s * a.tangent, a.tangent, column=a.column,
+                              hill=hill)
         except SimulationError:
             return best
         best, fc = c, _tests(c)[kind]
@@ -309,12 +326,12 @@ def _check(step: float, min_step: float, max_step: float, max_points: int) -> No
         raise ParameterError(f"max_points must be at least 2, got {max_points}")
 
 
-def _start(problem: Problem, start: float, harmonics, guess, tolerance: float,
-           direction: float) -> tuple[_Curve, _Point, bool]:
+def _start(problem: Problem, start: float, harmonics, guess, tolerance: float, direction: float,
+           max_harmonics: int) -> tuple[_Curve, _Point, bool]:
     """The curve and its first point, its tangent along the parameter's ``direction``
     (+-1): the orbit at ``start`` by :func:`harmonic_balance` (the physical, clipped
     contact law: it refuses an orbit that leaves the cam)."""
-    first = harmonic_balance(problem, harmonics, guess=guess, value=start)
+    first = harmonic_balance(problem, harmonics, guess=guess, value=start, max_harmonics=max_harmonics)
     model = GridModel(problem, start)
     mode = model.evaluate(first.times, first.samples)[2]
     view = harmonic_orbit_view(problem, first, start, mode)
@@ -370,7 +387,8 @@ def continue_harmonic(problem: Problem, start: float, stop: float, harmonics: in
         raise ParameterError(f"the range must be two different finite values, got {start} and {stop}")
     problem.build(stop)                                         # refuse an end value the problem cannot take
     problem = replace(problem, build=functools.lru_cache(maxsize=8)(problem.build))   # each value built once
-    curve, point, auto = _start(problem, start, harmonics, guess, tolerance, 1.0 if stop > start else -1.0)
+    curve, point, auto = _start(problem, start, harmonics, guess, tolerance, 1.0 if stop > start else -1.0,
+                                max_harmonics)
     curve, point = _refined(curve, point, auto, tail_tolerance, max_harmonics)
     points, bifurcations = [point], []
     if progress:
