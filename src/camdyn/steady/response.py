@@ -112,7 +112,8 @@ def harmonic_orbit_view(problem: Problem, orbit: HarmonicOrbit, value: float, mo
     """The harmonic-balance ``orbit`` at the parameter ``value`` [its unit] as shooting's
     :class:`~camdyn.continuation.orbits.Orbit`: its state at ``t_start``, Hill's
     multipliers, no impacts, the contact margins over its grid samples (``mode`` the hybrid
-    mode there) and each unknown's largest magnitude over them; ``monodromy`` NaN."""
+    mode there) and each unknown's largest magnitude over them; ``monodromy`` NaN and
+    ``residual`` the frequency-domain residual's max-norm (unit of the state rates)."""
     p, period = problem.build(value)
     states = np.tile(problem.full_state(orbit.samples[0], value), (orbit.samples.shape[0], 1))
     states[:, :problem.unknowns] = orbit.samples
