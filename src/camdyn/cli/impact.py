@@ -55,8 +55,9 @@ def _impact_figures(plot_dir: Optional[Path], free: bool) -> list:
 
 
 #: Methods of ``camdyn identify impact-damping``: the thesis's residues of trial
-#: simulations (the default) and the direct restoring-force regression.
-IMPACT_METHODS = ("residue", "direct")
+#: simulations (the default), the direct restoring-force regression, and the output-error
+#: fit of the impacts' force histories started from the direct estimate.
+IMPACT_METHODS = ("residue", "direct", "output-error")
 #: Headline keys of the direct estimate (JSON ``summary``).
 _DIRECT_SUMMARY = ("method", "beta", "beta_units", "n", "mode", "correlation", "identifiable", "impacts_used",
                    "records", "damping_at_peak", "damping_at_peak_units", "peak_penetration",
@@ -87,7 +88,8 @@ def identify_impact_damping(
         runout: Optional[List[str]] = typer.Option(None, metavar="LENGTH", help="Cam runout e (once, or per "
                                                    "record); default from each file's metadata, else the preset's."),
         method: str = typer.Option("residue", metavar="METHOD", help="residue (the thesis's trial simulations, "
-                                   "default) or direct (restoring-force regression on the rebuilt contact force)."),
+                                   "default), direct (restoring-force regression on the rebuilt contact force) or "
+                                   "output-error (the impacts' force histories fitted by simulation, one record)."),
         fix_n: Optional[float] = typer.Option(None, "--fix-n", help="Fix the exponent n (e.g. 1.5, 1.45; "
                                                                     "0 = viscous)."),
         residue: Optional[str] = typer.Option(None, help="Residue minimised: lambda1, lambda2, lambda3 or combined "
@@ -115,23 +117,31 @@ def identify_impact_damping(
     records = [read_measurement(p) for p in data]
     speeds = _per_record(speed, len(records), "speed", lambda s: parse_speed(s))
     runouts = _per_record(runout, len(records), "runout", lambda s: parse_quantity(s, "m", "cam.runout"))
-    if method == "direct":
-        _identify_direct(system, records, speeds, runouts, fix_n, fit_stiffness, json_out)
+    if method == "output-error" and len(records) != 1:
+        raise ParameterError(f"--method output-error fits one record at a time, got {len(records)}")
+    if method in ("direct", "output-error"):
+        _identify_direct(system, records, speeds, runouts, fix_n, fit_stiffness, json_out, method)
     else:
         _identify_residue(system, records, speeds, runouts, fix_n, residue, bootstrap, targets, json_out)
 
 
-def _identify_direct(system, records, speeds, runouts, fix_n, fit_stiffness, json_out) -> None:
+def _identify_direct(system, records, speeds, runouts, fix_n, fit_stiffness, json_out, method) -> None:
+    """The direct method, or the output-error fit started from it."""
     from camdyn.identification.impact_direct import estimate_impact_damping_direct
+    from camdyn.identification.impact_output_error import estimate_impact_damping_output_error
 
-    with err_console.status("identifying the impact damping (direct) ...") if not json_out else nullcontext():
-        est = estimate_impact_damping_direct(system, records, speed=speeds, runout=runouts, exponent=fix_n,
-                                             fit_stiffness=fit_stiffness)
+    with err_console.status(f"identifying the impact damping ({method}) ...") if not json_out else nullcontext():
+        if method == "direct":
+            est = estimate_impact_damping_direct(system, records, speed=speeds, runout=runouts, exponent=fix_n,
+                                                 fit_stiffness=fit_stiffness)
+        else:
+            est = estimate_impact_damping_output_error(system, records[0], speed=speeds[0], runout=runouts[0],
+                                                       exponent=fix_n)
     if not json_out:
         _print_direct_table(est)
         return
     full = est.to_dict()
-    summary = {k: full.pop(k) for k in _DIRECT_SUMMARY}
+    summary = {k: full.pop(k) for k in _DIRECT_SUMMARY if k in full}
     per_impact = full.pop("per_impact")
     emit_json("identify-impact-damping", summary, **full, files=[], per_impact=per_impact)
 
@@ -186,9 +196,11 @@ def _print_impact_table(est) -> None:
 
 
 def _print_direct_table(est) -> None:
-    table = Table("quantity", "value", "95 % interval (impact-clustered)")
+    direct = not hasattr(est, "evaluations")
+    table = Table("quantity", "value", "95 % interval (impact-clustered)" if direct else "95 % interval (Jacobian)")
     ci = est.confidence
-    table.add_row("method", "direct (restoring-force regression)", "")
+    table.add_row("method", "direct (restoring-force regression)" if direct
+                  else "output-error (force histories simulated per impact)", "")
     table.add_row("beta", f"{est.beta:.5g} {est.beta_units}", f"{ci['beta'][0]:.4g} - {ci['beta'][1]:.4g}")
     table.add_row("n", f"{est.exponent:.5g}" + (" (fixed)" if est.mode != "free" else ""),
                   f"{ci['n'][0]:.4g} - {ci['n'][1]:.4g}")
@@ -197,11 +209,14 @@ def _print_direct_table(est) -> None:
     table.add_row("peak penetration", f"{est.peak_penetration * 1e6:.4g} um", "")
     if est.mode == "free":
         table.add_row("correlation of beta and n", f"{est.correlation:.5f}", "")
-        table.add_row("n identifiable", "yes" if est.identifiable else "no", "")
+        if direct:
+            table.add_row("n identifiable", "yes" if est.identifiable else "no", "")
     table.add_row("rms force residual", f"{est.rms_residual:.3g} N", "")
     table.add_row("impacts used", f"{est.impacts_used} from {est.records} record(s)", "")
+    if not direct:
+        table.add_row("start (direct)", f"beta {est.start['beta']:.5g}, n {est.start['n']:.5g}", "")
     console.print(table)
-    if not est.identifiable:
+    if direct and not est.identifiable:
         err_console.print(f"warning: n is not identifiable: {est.diagnosis}")
 
 
