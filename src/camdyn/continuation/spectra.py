@@ -15,7 +15,7 @@ import numpy as np
 
 from camdyn.errors import ParameterError
 from camdyn.model.outputs import CHANNELS, derived
-from camdyn.systems import registry as systems
+from camdyn.systems.traits import has_cam_channels
 
 __all__ = ["HARMONIC_CHANNELS", "cam_harmonics", "channel_harmonics", "channel_units"]
 
@@ -52,7 +52,7 @@ def channel_harmonics(system_id: int, p: np.ndarray, times: np.ndarray, states: 
     ``times`` (N,) [s] over one orbit period, end point excluded, ``states`` (N, >= 3)
     (alpha [rad], alpha_dot [rad/s], ...), ``modes`` (N, mode size) and the parameter
     vector ``p``. None for another system (its channels are not the cam-follower's)."""
-    if system_id != systems.CAM_FOLLOWER:
+    if not has_cam_channels(system_id):
         return None
     channel_units(names)
     values = derived(np.asarray(times, float), np.ascontiguousarray(states[:, :3], dtype=float),

@@ -52,7 +52,6 @@ from camdyn.continuation.margins import contact_margins
 from camdyn.continuation.orbits import STABILITY_MARGIN, Orbit
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError, SimulationError
-from camdyn.model import layout as L
 from camdyn.steady.harmonic_balance import (
     GridModel,
     HarmonicOrbit,
@@ -62,7 +61,7 @@ from camdyn.steady.harmonic_balance import (
     resize,
     tail_measure,
 )
-from camdyn.systems import registry as systems
+from camdyn.systems.traits import contact_mode_slot, unclipped
 
 __all__ = ["HarmonicBranch", "continue_harmonic", "harmonic_orbit_view"]
 
@@ -98,14 +97,9 @@ class HarmonicBranch:
 def _unclipped(problem: Problem):
     """The map of the parameter vector to the one balanced: the cam-follower's contact law
     unclipped (smooth through ``min Fn = 0``); None for another model."""
-    if problem.system_id != systems.CAM_FOLLOWER:
+    if unclipped(problem.system_id, problem.build(problem.value)[0]) is None:
         return None
-
-    def parameters(p: np.ndarray) -> np.ndarray:
-        p = p.copy()
-        p[L.CLIP] = 0.0
-        return p
-    return parameters
+    return lambda p: unclipped(problem.system_id, p)
 
 
 def harmonic_orbit_view(problem: Problem, orbit: HarmonicOrbit, value: float, mode: np.ndarray) -> Orbit:
@@ -120,8 +114,9 @@ def harmonic_orbit_view(problem: Problem, orbit: HarmonicOrbit, value: float, mo
     closed = np.vstack([states, states[:1]])                       # the last sample is the first
     times = np.r_[orbit.times, orbit.times[0] + period]
     modes = np.tile(mode, (closed.shape[0], 1))
-    if problem.system_id == systems.CAM_FOLLOWER:
-        modes[:, L.MODE_CONTACT] = 1.0
+    slot = contact_mode_slot(problem.system_id)
+    if slot is not None:
+        modes[:, slot] = 1.0
     force, sliding = contact_margins(problem.system_id, p, times, closed, modes)
     u = problem.unknowns
     stable = bool(np.all(np.abs(orbit.multipliers) < 1.0 - STABILITY_MARGIN))

@@ -15,14 +15,13 @@ from camdyn.continuation.problem import Problem, system_problem
 from camdyn.continuation.results import check_trace_settings, orbit_record, parameter_value
 from camdyn.continuation.spectra import HARMONIC_CHANNELS, channel_harmonics
 from camdyn.errors import ParameterError
-from camdyn.model import layout as L
 from camdyn.model.equilibrium import as_system
 from camdyn.model.outputs import CHANNELS, derived
 from camdyn.params.system import System
 from camdyn.simulation import limits
 from camdyn.steady.harmonic_balance import GridModel, HarmonicOrbit
 from camdyn.steady.response import HarmonicBranch, continue_harmonic
-from camdyn.systems import registry as systems
+from camdyn.systems.traits import contact_mode_slot
 
 __all__ = ["METHOD", "trace_harmonic", "harmonic_record", "harmonic_records"]
 
@@ -75,8 +74,9 @@ def harmonic_record(problem: Problem, orbit: Orbit, harmonic: HarmonicOrbit, cha
     states = np.tile(problem.full_state(harmonic.samples[0], value), (harmonic.times.size, 1))
     states[:, :problem.unknowns] = harmonic.samples
     modes = np.tile(model.evaluate(harmonic.times, harmonic.samples)[2], (harmonic.times.size, 1))
-    if problem.system_id == systems.CAM_FOLLOWER:
-        modes[:, L.MODE_CONTACT] = 1.0                              # balanced in contact throughout
+    slot = contact_mode_slot(problem.system_id)
+    if slot is not None:
+        modes[:, slot] = 1.0                                        # balanced in contact throughout
     spectra = channel_harmonics(problem.system_id, model.p, harmonic.times, states, modes, harmonic.harmonics,
                                 names=channels)
     if spectra is not None:
