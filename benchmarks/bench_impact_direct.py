@@ -7,7 +7,8 @@ command line's default 64 replicates. Everything runs in this one process, each 
 once to warm up (compiled code loaded), then ``--repeat`` rounds interleaved; the best
 round of each counts. CPU time is the figure of merit (the machine may be shared); the
 wall time is kept beside it. Targets: direct at most 0.2 s, and at least 10 times faster
-than the residue method.
+than the residue method; output-error (started from the direct estimate, included in its
+time) at most 10 s.
 
 Usage:  python benchmarks/bench_impact_direct.py [--repeat N]   (writes benchmarks/impact_direct.json)
 """
@@ -23,6 +24,7 @@ from pathlib import Path
 import camdyn
 from camdyn.identification.impact_damping import estimate_impact_damping
 from camdyn.identification.impact_direct import estimate_impact_damping_direct
+from camdyn.identification.impact_output_error import estimate_impact_damping_output_error
 from camdyn.records.synthesis import synthesize
 
 HERE = Path(__file__).resolve().parent
@@ -45,6 +47,7 @@ def main() -> None:
     record = synthesize(rig, 15.0, revolutions=21, sample_rate=204.8e3, noise=0.01, settle=100)
     methods = {
         "direct": lambda: estimate_impact_damping_direct(rig, record),
+        "output_error": lambda: estimate_impact_damping_output_error(rig, record),
         "residue_no_bootstrap": lambda: estimate_impact_damping(rig, record, bootstrap=0),
         "residue_bootstrap_64": lambda: estimate_impact_damping(rig, record, bootstrap=64),
     }
