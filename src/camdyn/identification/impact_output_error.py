@@ -22,7 +22,8 @@ The fit starts from the direct estimate (``beta``, ``n``, each impact's approach
 velocity) and from the best cam phase of a coarse scan. The Jacobian is by forward
 differences of the batched simulation: each impact's force depends on its own onset and
 approach velocity only, so all impacts' onsets are perturbed in one batch and all
-approach velocities in another (5 batches per Jacobian, whatever the number of impacts);
+approach velocities in another (6 rows of one batch per Jacobian, whatever the number
+of impacts);
 camdyn's parameter sensitivities are not used. The 95 % intervals come from the
 Gauss-Newton covariance ``s^2 (J^T J)^-1`` at the solution (nuisance parameters included,
 white force noise assumed), ``correlation`` from the same matrix.
@@ -82,7 +83,7 @@ class OutputErrorEstimate:
             "peak_penetration": self.peak_penetration, "peak_penetration_units": "m",
             "confidence_95": {k: list(v) for k, v in self.confidence.items()},
             "correlation": self.correlation, "rms_residual": self.rms_residual,
-            "impacts_used": self.impacts_used, "evaluations": self.evaluations, "start": self.start,
+            "impacts_used": self.impacts_used, "records": 1, "evaluations": self.evaluations, "start": self.start,
             "per_impact": {k: np.asarray(v).tolist() for k, v in self.per_impact.items()},
         }
 
