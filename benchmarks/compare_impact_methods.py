@@ -134,14 +134,49 @@ def table(doc) -> str:
     return "\n".join(lines)
 
 
+def figure(doc, path: str) -> None:
+    """Bias of n and of the damping at the peak [%] of each method under each condition
+    (the JSON written before), its spread over the seeds as error bars."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = doc["rows"]
+    labels = [_label(r) for r in rows]
+    names = list(rows[0]["methods"])
+    fig, axes = plt.subplots(2, 1, figsize=(8.0, 6.0), sharex=True, layout="constrained")
+    width = 0.8 / len(names)
+    x = np.arange(len(rows))
+    for ax, key, title in ((axes[0], "n", "exponent n"), (axes[1], "damping", "damping at the peak penetration")):
+        for i, name in enumerate(names):
+            bias = [r["methods"][name].get(f"{key}_bias_pct") for r in rows]
+            spread = [r["methods"][name].get(f"{key}_spread_pct") or 0.0 for r in rows]
+            ax.bar(x + (i - (len(names) - 1) / 2) * width, [np.nan if b is None else b for b in bias], width,
+                   yerr=spread, label=name, capsize=2)
+        ax.axhline(0.0, color="0.3", lw=0.8)
+        ax.set_yscale("symlog", linthresh=0.1)
+        ax.set_ylabel(f"bias of {title} [%]")
+        ax.grid(axis="y", alpha=0.3)
+    fig.legend(*axes[0].get_legend_handles_labels(), ncols=len(names), loc="outside upper center", frameon=False)
+    axes[1].set_xticks(x, labels, rotation=30, ha="right")
+    axes[0].set_title(f"impact damping from records of an independent model (beta = {doc['law']['beta']:.3g}, "
+                      f"n = {doc['law']['n']:g}; {doc['seeds']} noise seeds)", fontsize=10)
+    fig.savefig(path, dpi=110)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--out", default=str(HERE / "compare_impact_methods.json"))
     parser.add_argument("--table", action="store_true", help="print the table of the JSON written before")
+    parser.add_argument("--figure", help="draw the JSON written before into this figure file")
     args = parser.parse_args()
     if args.table:
         print(table(json.loads(Path(args.out).read_text())))
+        return
+    if args.figure:
+        figure(json.loads(Path(args.out).read_text()), args.figure)
         return
     duration = 0.4 + (max(x for k, x in CONDITIONS if k == "impacts") + 2) / SPEED
     t, channels, _ = simulate_independent(BETA, N, duration=duration)

@@ -55,6 +55,7 @@ RECORD = FIGURES / "figures.json"
 #: the command (as a user types it) that makes each committed figure
 SOURCES = {
     "impact_rig_time.png": "camdyn demo --out DIR",
+    "impact_methods_comparison.png": "python benchmarks/compare_impact_methods.py --figure FILE",
     "continuation_harmonic_balance.png": "camdyn continue sundar2014-friction --set cam.runout=0.875mm --method "
                                          "harmonic-balance --from 5Hz --to 25Hz --plot FILE",
     "friction_rig_spectrum.png": "camdyn demo --out DIR",
