@@ -324,6 +324,13 @@ run()
 """
 
 
+def _signals_as_on_a_terminal():
+    # a runner started under nohup, or with SIGINT ignored, passes the ignoring on, and
+    # camdyn keeps an ignored signal ignored (as nohup asks): a terminal's defaults here
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_DFL)
+
+
 @pytest.mark.parametrize("sig", [signal.SIGHUP, signal.SIGTERM, signal.SIGINT])
 def test_a_command_stopped_during_its_write_leaves_no_temporary(tmp_path, sig):
     # SIGHUP is what a closed terminal sends: handled as SIGTERM and Ctrl-C are
@@ -331,7 +338,7 @@ def test_a_command_stopped_during_its_write_leaves_no_temporary(tmp_path, sig):
     proc = subprocess.Popen([sys.executable, "-c", _BLOCKED_WRITER, "synthesize", "sundar2014-impact", "--speed",
                              "16Hz", "--revolutions", "2", "--out", "meas.csv", "--force"], cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+                            preexec_fn=_signals_as_on_a_terminal)
     try:
         assert proc.stdout.readline().strip() == "writing", proc.stderr.read()
         assert len(list(tmp_path.glob(".meas.csv.*.tmp"))) == 1       # the write is under way
