@@ -12,6 +12,7 @@ import importlib
 import os
 import sys
 from collections.abc import Iterable
+from pathlib import Path
 
 import numpy as np
 import typer
@@ -91,6 +92,21 @@ def refuse_inputs_as_outputs(outputs: Iterable, inputs: Iterable | None = None) 
             if same:
                 raise OutputError(f"cannot write {out}: it is the input {source} of this command "
                                   f"(--force does not change that); choose another output name")
+
+
+def check_continue_settings(period: int, max_points: int, transient: int, step: float, doublings: int,
+                            brute_force: int, plot: Path | None) -> None:
+    """Refuse ``camdyn continue``'s settings out of range, before any work (every family's
+    branch takes them alike)."""
+    from camdyn.continuation.branches import MIN_STEP
+
+    if period < 1 or max_points < 2 or transient < 1 or not step >= MIN_STEP:
+        raise ParameterError(f"--period and --transient must be at least 1, --max-points at least 2, --step at "
+                             f"least {MIN_STEP:g}")
+    if doublings < 0 or brute_force < 0 or brute_force == 1:
+        raise ParameterError("--doublings must be at least 0, --brute-force 0 or at least 2")
+    if brute_force and plot is None:
+        raise ParameterError("--brute-force draws the diagram under the branches of --plot: give --plot")
 
 
 def parse_grid(text: str, what: str, unit: str | None = None) -> np.ndarray:

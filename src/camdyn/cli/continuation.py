@@ -8,7 +8,15 @@ from typing import List, Optional
 
 import typer
 
-from camdyn.cli.common import ForceOption, JsonOption, SetOption, console, err_console, load_source
+from camdyn.cli.common import (
+    ForceOption,
+    JsonOption,
+    SetOption,
+    check_continue_settings,
+    console,
+    err_console,
+    load_source,
+)
 from camdyn.cli.harmonic import (
     DoublingsOption,
     HarmonicsOption,
@@ -107,7 +115,7 @@ def continue_branch(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
     first, last = _value(start, "--from", unit, parameter), _value(stop, "--to", unit, parameter)
     if first == last:
         raise ParameterError("--from and --to must differ")
-    _check_settings(period, max_points, transient, step, doublings, brute_force, plot)
+    check_continue_settings(period, max_points, transient, step, doublings, brute_force, plot)
     bar = _Bar(quiet or (json_ and not err_console.is_terminal), parameter, unit, first, last,
                max_points * (1 + doublings))
     if method == "harmonic-balance":
@@ -153,20 +161,6 @@ def _print_branches(parameter: str, unit: str, branches, bifurcations: list[dict
     for gap in gaps:
         console.print(f"gap from {parameter} = {gap['start']:.6g} to {gap['stop']:.6g} {unit}: {gap['reason']}",
                       highlight=False, soft_wrap=True)
-
-
-def _check_settings(period: int, max_points: int, transient: int, step: float, doublings: int, brute_force: int,
-                    plot: Path | None) -> None:
-    """Refuse settings out of range, before any work."""
-    from camdyn.continuation.branches import MIN_STEP
-
-    if period < 1 or max_points < 2 or transient < 1 or not step >= MIN_STEP:
-        raise ParameterError(f"--period and --transient must be at least 1, --max-points at least 2, --step at "
-                             f"least {MIN_STEP:g}")
-    if doublings < 0 or brute_force < 0 or brute_force == 1:
-        raise ParameterError("--doublings must be at least 0, --brute-force 0 or at least 2")
-    if brute_force and plot is None:
-        raise ParameterError("--brute-force draws the diagram under the branches of --plot: give --plot")
 
 
 def _max_time(text: str | None) -> float:

@@ -206,7 +206,7 @@ def continue_translating_command(source: str, assignments, parameter: str, start
     the Poincaré section at N speeds under the branches of ``--plot`` (the outputs are
     checked already); with ``cover``, restarts past where a branch ends inside the range
     (:func:`~camdyn.continuation.coverage.covered_branches`)."""
-    from camdyn.continuation.branches import MIN_STEP
+    from camdyn.cli.common import check_continue_settings
     from camdyn.continuation.coverage import STALL_POINTS, coverage_summary, covered_branches, gap_records
     from camdyn.continuation.translating import RPM, SPEED_KEY, trace_translating, translating_dataset
 
@@ -215,13 +215,7 @@ def continue_translating_command(source: str, assignments, parameter: str, start
     first, last = 2.0 * math.pi * parse_speed(start, "--from"), 2.0 * math.pi * parse_speed(stop, "--to")
     if not (first > 0 and last > 0 and math.isfinite(first) and math.isfinite(last)) or first == last:
         raise ParameterError(f"--from and --to must be two different positive cam speeds, got {start} and {stop}")
-    if period < 1 or max_points < 2 or transient < 1 or not step >= MIN_STEP:
-        raise ParameterError(f"--period and --transient must be at least 1, --max-points at least 2, --step at "
-                             f"least {MIN_STEP:g}")
-    if doublings < 0 or brute_force < 0 or brute_force == 1:
-        raise ParameterError("--doublings must be at least 0, --brute-force 0 or at least 2")
-    if brute_force and plot is None:
-        raise ParameterError("--brute-force draws the diagram under the branches of --plot: give --plot")
+    check_continue_settings(period, max_points, transient, step, doublings, brute_force, plot)
     follower, spec = _without_friction(source, assignments, "camdyn continue")
     problem, branch = trace_translating(follower, f"{float(first)!r} rad/s", f"{float(last)!r} rad/s", period,
                                         step=step, max_points=max_points, transient=transient,
