@@ -33,7 +33,7 @@ import numpy as np
 
 from camdyn.analysis.chaos import LyapunovResult
 from camdyn.analysis.lyapunov import LyapunovSpectrum, check_periods, count, standard_error
-from camdyn.continuation.orbits import driver_settings, flow, shoot, transient_state
+from camdyn.continuation.orbits import driver_settings, flow, transient_state
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError
 from camdyn.simulation import limits
@@ -106,8 +106,6 @@ def _start(problem: Problem, value: float | None, revolutions, transient) -> tup
     _, period = problem.build(value)
     x = transient_state(problem, transient, value) if transient else np.asarray(
         problem.template[:problem.unknowns], dtype=float).copy()
-    for _ in range(SCALE_SAMPLES - 1):
-        x = shoot(problem, x, value, 1)
     p, _ = problem.build(value)
     t0 = problem.t_start
     times = t0 + period * np.arange(SCALE_SAMPLES * 64 + 1) / 64
@@ -133,8 +131,8 @@ def orbit_lyapunov(problem: Problem, value: float | None = None, revolutions: in
     revolutions : int
         Forcing periods averaged [-].
     transient : int
-        Forcing periods simulated and dropped first [-] (``transient + 15`` in all: the
-        last 16 give the norm's scales).
+        Forcing periods simulated and dropped first [-], then :data:`SCALE_SAMPLES`
+        more whose samples give the norm's scales.
     separation : float
         Gap ``d0`` between the trajectories in the scaled norm [-] (a fraction of the
         motion), far above the integration error at the problem's tolerances.
