@@ -136,7 +136,7 @@ def fixed_steps(p, y0, t_end, steps, mid=False):
     jacobian = np.zeros((n, n))
     lu_r, lu_c = np.empty((n, n)), np.empty((n, n), complex)
     piv_r, piv_c = np.empty(n, np.int64), np.empty(n, np.int64)
-    z, w, work, cwork = np.zeros((3, n)), np.empty((3, n)), np.empty((6, n)), np.empty((2, n), complex)
+    z, w, work, cwork = np.zeros((3, n)), np.empty((3, n)), np.empty((9, n)), np.empty((2, n), complex)
     coefficients, out = np.empty((4, n)), np.empty(n)
     mid_error, iterations, faccon = 0.0, 0, 1.0
     for k in range(steps):
@@ -146,7 +146,7 @@ def fixed_steps(p, y0, t_end, steps, mid=False):
         assert not radau_factor(jacobian, h, lu_r, piv_r, lu_c, piv_c)
         radau_start(h, h, y, coefficients, z, k > 0)
         outcome, _, its, _, faccon, _, _ = radau_step(rhs, t, y, f0, h, p, 1e-12, 1e-12, n, 1e-3, faccon, False,
-                                                       lu_r, piv_r, lu_c, piv_c, z, w, y1, err, work, cwork)
+                                                       lu_r, piv_r, lu_c, piv_c, z, w, y1, err, work, cwork, np.empty(6))
         assert outcome == STEP_CONVERGED
         iterations += its
         radau_dense_coefficients(y, z, coefficients)
@@ -239,9 +239,9 @@ def _estimate(p, y0, h, refine):
     rhs(0.0, y0, p, f0)
     jac(0.0, y0, p, jacobian)
     assert not radau_factor(jacobian, h, lu_r, piv_r, lu_c, piv_c)
-    z, w, work, cwork = np.zeros((3, n)), np.empty((3, n)), np.empty((6, n)), np.empty((2, n), complex)
+    z, w, work, cwork = np.zeros((3, n)), np.empty((3, n)), np.empty((9, n)), np.empty((2, n), complex)
     outcome = radau_step(rhs, 0.0, y0, f0, h, p, 1e-6, 1e-6, n, 1e-6, 1.0, refine,
-                         lu_r, piv_r, lu_c, piv_c, z, w, y1, err, work, cwork)[0]
+                         lu_r, piv_r, lu_c, piv_c, z, w, y1, err, work, cwork, np.empty(6))[0]
     assert outcome == STEP_CONVERGED
     return err, y1
 
@@ -385,9 +385,9 @@ def _one_step(p, t, y, h):
     rhs(t, y, p, f0)
     jac(t, y, p, jacobian)
     assert not radau_factor(jacobian, h, lu_r, piv_r, lu_c, piv_c)
-    z, w, work, cwork = np.zeros((3, n)), np.empty((3, n)), np.empty((6, n)), np.empty((2, n), complex)
+    z, w, work, cwork = np.zeros((3, n)), np.empty((3, n)), np.empty((9, n)), np.empty((2, n), complex)
     outcome = radau_step(rhs, t, y, f0, h, p, 1e-12, 1e-12, n, 1e-3, 1.0, False,
-                         lu_r, piv_r, lu_c, piv_c, z, w, y1, err, work, cwork)[0]
+                         lu_r, piv_r, lu_c, piv_c, z, w, y1, err, work, cwork, np.empty(6))[0]
     assert outcome == STEP_CONVERGED
     return y1
 
@@ -449,9 +449,9 @@ def _estimate_with_atol(p, y0, atol):
     rhs(0.0, y0, p, f0)
     jac(0.0, y0, p, jacobian)
     radau_factor(jacobian, 1e-3, lu_r, piv_r, lu_c, piv_c)
-    z, w, work, cwork = np.zeros((3, n)), np.empty((3, n)), np.empty((6, n)), np.empty((2, n), complex)
+    z, w, work, cwork = np.zeros((3, n)), np.empty((3, n)), np.empty((9, n)), np.empty((2, n), complex)
     result = radau_step(rhs, 0.0, y0, f0, 1e-3, p, 1e-6, atol, n, 1e-3, 1.0, False,
-                        lu_r, piv_r, lu_c, piv_c, z, w, y1, err, work, cwork)
+                        lu_r, piv_r, lu_c, piv_c, z, w, y1, err, work, cwork, np.empty(6))
     assert result[0] == STEP_CONVERGED
     return result[1], y1.copy(), err.copy()
 

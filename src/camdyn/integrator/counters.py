@@ -18,9 +18,11 @@ COUNT_ROOT_ITERATIONS = 7
 COUNT_STATUS = 8
 COUNT_EVENTS_DROPPED = 9
 COUNT_BDF = 10   # accepted steps of the BDF family (METHOD_MULTISTEP); the others are explicit_steps
-COUNT_SIZE = 11
+COUNT_RADAU = 11  # accepted Radau IIA steps (METHOD_RADAU, METHOD_SWITCHING)
+COUNT_SIZE = 12
 COUNTER_NAMES = ("accepted_steps", "rejected_steps", "rhs_calls", "jacobians", "explicit_steps",
-                 "rosenbrock_steps", "events", "root_iterations", "status", "events_dropped", "bdf_steps")
+                 "rosenbrock_steps", "events", "root_iterations", "status", "events_dropped", "bdf_steps",
+                 "radau_steps")
 
 STATUS_OK = 0
 STATUS_MAX_STEPS = 1

@@ -2,14 +2,15 @@
 
 Algorithm (per accepted step from ``t`` to ``t + h``):
 
-1. step with DOP853, Dormand-Prince 5(4) or the Rosenbrock method RODAS4 (chosen per mode by
-   the system, or forced), or with the Adams method of :mod:`camdyn.integrator.nordsieck`
+1. step with DOP853, Dormand-Prince 5(4), the Rosenbrock method RODAS4 or Radau IIA
+   (chosen per mode by the system, or forced, or DOP853 switched to Radau IIA in
+   sustained contact, :mod:`camdyn.integrator.implicit`), or with the Adams method of :mod:`camdyn.integrator.nordsieck`
    when forced (``METHOD_ADAMS``), or with Adams and BDF switched automatically
    (``METHOD_MULTISTEP``, :mod:`camdyn.integrator.multistep`; the history is started from
    a DOP853 step after every event); accept if the scaled error norm is at most 1;
 2. build the step's continuous extension (Dormand-Prince's own 4th-order dense output,
-   the cubic Hermite interpolant after a Rosenbrock step, the Nordsieck polynomial after
-   an Adams or BDF step);
+   the cubic Hermite interpolant after a Rosenbrock step, the collocation polynomial after
+   a Radau IIA step, the Nordsieck polynomial after an Adams or BDF step);
 3. for every guard active in the current mode, look for a sign change against its
    expected sign at the step end and at the extrema of the guard's own cubic (from its
    exact rates at both ends, which the system computes from the acceleration; this
@@ -45,6 +46,7 @@ from camdyn.integrator.counters import (
     COUNT_EVENTS_DROPPED,
     COUNT_EXPLICIT,
     COUNT_JACOBIANS,
+    COUNT_RADAU,
     COUNT_REJECTED,
     COUNT_RHS,
     COUNT_ROOT_ITERATIONS,
@@ -78,6 +80,14 @@ from camdyn.integrator.events import (
     restart,
     retake,
 )
+from camdyn.integrator.implicit import (
+    implicit_proposal,
+    implicit_reset,
+    implicit_step,
+    implicit_workspace,
+    is_stiff,
+    stiffness_test,
+)
 from camdyn.integrator.inlining import InlinedPipeline
 from camdyn.integrator.interrupt import POLL_STEPS, interrupted
 from camdyn.integrator.multistep import history_rows, multistep_step
@@ -88,6 +98,7 @@ from camdyn.integrator.steppers import (
     KIND_DP5,
     KIND_HERMITE,
     KIND_NORDSIECK,
+    KIND_RADAU,
     dop853_error_norm,
     dop853_step,
     dormand_prince_step,
@@ -99,9 +110,10 @@ from camdyn.systems import registry as systems
 __all__ = [
     "integrate", "COUNT_ACCEPTED", "COUNT_REJECTED", "COUNT_RHS", "COUNT_JACOBIANS", "COUNT_EXPLICIT",
     "COUNT_ROSENBROCK", "COUNT_EVENTS", "COUNT_ROOT_ITERATIONS", "COUNT_STATUS", "COUNT_EVENTS_DROPPED",
-    "COUNT_BDF", "COUNT_SIZE", "COUNTER_NAMES", "STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW",
+    "COUNT_BDF", "COUNT_RADAU", "COUNT_SIZE", "COUNTER_NAMES", "STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW",
     "STATUS_NOT_FINITE", "STATUS_ZENO", "STATUS_INTERRUPTED", "STATUS_MESSAGES", "METHOD_AUTO", "METHOD_EXPLICIT",
-    "METHOD_ROSENBROCK", "METHOD_DOP853", "METHOD_ADAMS", "METHOD_MULTISTEP", "EVENT_TIME", "EVENT_GUARD",
+    "METHOD_ROSENBROCK", "METHOD_DOP853", "METHOD_ADAMS", "METHOD_MULTISTEP", "METHOD_RADAU", "METHOD_SWITCHING",
+    "EVENT_TIME", "EVENT_GUARD",
     "EVENT_NEW_SIGN", "EVENT_MONITOR", "EVENT_GUARDS", "EVENT_RETRY_ABOVE", "EVENT_RETRY_BELOW", "EVENT_RETRY_LOST",
     "EVENT_RETRY_MARGIN", "EVENT_STEP_FLOOR", "event_columns",
 ]
@@ -112,6 +124,8 @@ METHOD_ROSENBROCK = 2  # RODAS4
 METHOD_DOP853 = 3  # DOP853
 METHOD_ADAMS = 4  # variable-order Adams-Moulton, Nordsieck form, functional iteration
 METHOD_MULTISTEP = 5  # Adams and BDF in Nordsieck form, switched automatically
+METHOD_RADAU = 6  # Radau IIA of order 5 (RADAU5's method), camdyn.integrator.implicit
+METHOD_SWITCHING = 7  # DOP853, and Radau IIA from stiffness detection to the next event
 #: Weight of the last accepted step's error norm in the step-size control of DOP853 steps
 #: controlled by their 5th-order estimate alone (:func:`_stabilized`) [-].
 STABILIZATION = 0.04
@@ -147,7 +161,8 @@ def _allocate(system, y_start, n_out, max_events):
 @numba.njit(cache=True, inline="always")
 def _workspace(n, m):
     """Scratch arrays of one run: stepper stages, the Rosenbrock iteration matrix and its
-    pivots, the Adams history, states [n], guard values [m], and the guard scan's."""
+    pivots, the Adams history, states [n], guard values [m], the guard scan's, and what
+    Radau IIA keeps between steps (:func:`camdyn.integrator.implicit.implicit_workspace`)."""
     history = np.zeros((history_rows(n), n))
     history[TIME, 0] = np.nan   # no history yet: the first Adams step starts at order 1
     stage_arrays = (np.empty((6, n)), np.empty((6, n)), np.empty((16, n)), np.empty((7, n)), np.empty(n),
@@ -156,7 +171,7 @@ def _workspace(n, m):
     guards = (np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m),
               np.empty(m))
     scan_arrays = (np.empty(n), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m))
-    return stage_arrays, states, guards, scan_arrays
+    return stage_arrays, states, guards, scan_arrays, implicit_workspace(n)
 
 
 @numba.njit(cache=True, inline="always")
@@ -209,8 +224,14 @@ def _next_step(t, h, h_max, t_end, max_steps, counters):
 
 
 @numba.njit(cache=True, inline="always")
+def _multistep(method):
+    """Whether ``method`` is one of the Nordsieck multistep methods."""
+    return method == METHOD_ADAMS or method == METHOD_MULTISTEP
+
+
+@numba.njit(cache=True, inline="always")
 def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, matrix, pivots, k16, ytmp, y1, f1,
-                err, err3, history, counters):
+                err, err3, history, implicit, counters):
     """One step of ``h`` [s] from ``(t, y)`` by the method chosen for the mode into ``y1``
     (and ``f1`` after an explicit step).
 
@@ -224,15 +245,24 @@ def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, m
         Scaled error norm (at most 1 to accept).
     """
     chosen = systems.preferred_method(system, mode, p) if method == 0 else method
-    if chosen >= METHOD_ADAMS and not adams_ready(history, t, y):
+    if chosen == METHOD_SWITCHING:
+        chosen = METHOD_RADAU if is_stiff(implicit[0]) else METHOD_DOP853
+    if _multistep(chosen) and not adams_ready(history, t, y):
         chosen = METHOD_DOP853   # a step that (re)starts the multistep history: _adams_start
-    if chosen == METHOD_ROSENBROCK:
+    if chosen == METHOD_RADAU:
+        kind = KIND_RADAU
+        e, calls, jacobians = implicit_step(system, t, y, f, h, mode, p, rtol, atol, systems.controlled_size(system),
+                                            implicit[0], implicit[1], work, y1, err)
+        counters[COUNT_RHS] += calls
+        counters[COUNT_JACOBIANS] += jacobians
+        order = 4.0
+    elif chosen == METHOD_ROSENBROCK:
         kind = KIND_HERMITE
         counters[COUNT_RHS] += rosenbrock_step(system, t, y, f, h, mode, p, work, stages, matrix, pivots, y1, err)
         counters[COUNT_JACOBIANS] += 1
         order = 4.0
         e = error_norm(y, y1, err, rtol, atol, systems.controlled_size(system))
-    elif chosen >= METHOD_ADAMS:
+    elif _multistep(chosen):
         kind = KIND_NORDSIECK
         e, order, calls, jacobians = multistep_step(system, t, y, f, h, mode, p, history, y1, f1, err, matrix, pivots,
                                                     rtol, atol, chosen == METHOD_MULTISTEP)
@@ -245,6 +275,8 @@ def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, m
         plain = systems.plain_error_estimate(system)
         order = 8.0
         e = dop853_error_norm(y, y1, err, err3, h, rtol, atol, systems.controlled_size(system), plain)
+        if method == METHOD_SWITCHING and e <= 1.0:
+            counters[COUNT_JACOBIANS] += stiffness_test(system, t + h, y1, f1, h, mode, p, implicit[0], implicit[1])
     else:
         kind = KIND_DP5
         counters[COUNT_RHS] += dormand_prince_step(system, t, y, f, h, mode, p, work, y1, f1, err)
@@ -284,13 +316,13 @@ def _verdict(t, h, e, order, y1, counters):
 
 @numba.njit(cache=True, inline="always")
 def _step_end(system, kind, t, h, y1, f1, mode, p, g1, gr1, history, counters):
-    """Count the accepted step; rates ``f1`` (after a Rosenbrock step) and guards ``g1``
+    """Count the accepted step; rates ``f1`` (after a Rosenbrock or Radau step) and guards ``g1``
     with their rates ``gr1`` at its end ``t + h`` [s]."""
     counters[COUNT_ACCEPTED] += 1
     if kind == KIND_NORDSIECK and history[FAMILY, 0] == BDF:
         counters[COUNT_BDF] += 1
-    elif kind == KIND_HERMITE:
-        counters[COUNT_ROSENBROCK] += 1
+    elif kind == KIND_HERMITE or kind == KIND_RADAU:
+        counters[COUNT_ROSENBROCK if kind == KIND_HERMITE else COUNT_RADAU] += 1
         systems.rhs(system, t + h, y1, mode, p, f1)
         counters[COUNT_RHS] += 1
     else:
@@ -355,12 +387,16 @@ def _stabilized(h, e, e_last):
 
 
 @numba.njit(cache=True, inline="always")
-def _proposal(system, method, kind, h, h_adams, e, e_accepted):
-    """The step [s] after an accepted step of ``kind``: the multistep history's first
-    step after its DOP853 start, the stabilized DOP853 step (:func:`_stabilized`) where
-    the system's DOP853 steps are controlled by their plain estimate, else ``h``."""
-    if method >= METHOD_ADAMS and kind == KIND_DOP853:
+def _proposal(system, method, kind, h_taken, h, h_adams, e, e_accepted, implicit):
+    """The step [s] after an accepted step of ``kind`` and size ``h_taken`` [s] for which
+    :func:`_advance` proposed ``h``: the multistep history's first step after its DOP853
+    start, the stabilized DOP853 step (:func:`_stabilized`) where the system's DOP853
+    steps are controlled by their plain estimate, RADAU5's control after a Radau IIA
+    step (:func:`camdyn.integrator.implicit.implicit_proposal`), else ``h``."""
+    if _multistep(method) and kind == KIND_DOP853:
         return h_adams
+    if kind == KIND_RADAU:
+        return implicit_proposal(implicit[0], h_taken, e, h)
     if kind == KIND_DOP853 and systems.plain_error_estimate(system):
         return _stabilized(h, e, e_accepted)
     return h
@@ -372,7 +408,7 @@ def _adams_start(system, method, kind, ready, t, h, y, y1, f1, mode, p, k16, ytm
     """After a DOP853 step that the Adams method took to (re)start, its history at the
     step's end from the step's continuous extension. Returns whether the extension is
     ready and the first Adams step [s] (``h`` otherwise)."""
-    if method < METHOD_ADAMS or kind != KIND_DOP853:
+    if not _multistep(method) or kind != KIND_DOP853:
         return ready, h
     ready = ensure_extension(ready, system, t, y, h, y1, f1, mode, p, k16, ytmp, f7, counters)
     return ready, adams_start(history, f7, y1, t + h, h, rtol, atol, systems.controlled_size(system), err)
@@ -417,7 +453,9 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     method : int
         0 lets the system choose per mode (``systems.preferred_method``); 1 Dormand-Prince
         5(4), 2 RODAS4, 3 DOP853, 4 Adams-Moulton of variable order (Nordsieck form), 5
-        Adams and BDF switched automatically (:mod:`camdyn.integrator.multistep`).
+        Adams and BDF switched automatically (:mod:`camdyn.integrator.multistep`), 6
+        Radau IIA of order 5, 7 DOP853 switched to Radau IIA when its steps are held by
+        stiffness, back at the next event (:mod:`camdyn.integrator.implicit`).
     max_steps, max_events : int
         Limits on accepted steps and on logged events.
     interruptible : bool
@@ -439,7 +477,8 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     counters : ndarray (COUNT_SIZE,) of int64
     """
     y_out, mode_out, events, counters, y, mode = _allocate(system, y_start, t_out.shape[0], max_events)
-    stage_arrays, states, guards, scan_arrays = _workspace(y.shape[0], events.shape[1] - EVENT_GUARDS - y.shape[0])
+    n = y.shape[0]
+    stage_arrays, states, guards, scan_arrays, implicit = _workspace(n, events.shape[1] - EVENT_GUARDS - n)
     work, stages, k16, f7, err3, h_regime, pts, matrix, pivots, history = stage_arrays
     y1, f, f1, err, ytmp, ymid, yo = states
     g, gr, g1, gr1, gv, grv, g_tmp, gr_tmp = guards
@@ -459,7 +498,7 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
                 counters[COUNT_STATUS] = STATUS_INTERRUPTED
                 break
         kind, order, e = _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, matrix, pivots,
-                                     k16, ytmp, y1, f1, err, err3, history, counters)
+                                     k16, ytmp, y1, f1, err, err3, history, implicit, counters)
         dwork = f7 if kind == KIND_DOP853 else (history if kind == KIND_NORDSIECK else work)
         ready = kind != KIND_DOP853
         h, verdict = _verdict(t, h, e, order, y1, counters)
@@ -485,13 +524,15 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
             last_event_t = t_new
             t = t_new
             monitor_max, h = restart(system, t, h, tau_event, y, f, g, gr, mode, p, h_regime, counters)
+            implicit_reset(implicit[0])   # a new mode: DOP853 again, nothing of Radau's kept
         elif k_event < 0:
             ready, h_adams = _adams_start(system, method, kind, ready, t, h, y, y1, f1, mode, p, k16, ytmp, f7,
                                           history, rtol, atol, err, counters)
+            h_taken = h
             t, i_out, monitor_max, h = _advance(system, t, h, t_end if last else t + h, e, order, y, f, y1, f1,
                                                 dwork, kind, mode, p, k16, ytmp, f7, yo, g, gr, g1, gr1, t_out, i_out,
                                                 y_out, mode_out, monitor_max, h_regime, ready, counters)
-            h = _proposal(system, method, kind, h, h_adams, e, e_accepted)
+            h = _proposal(system, method, kind, h_taken, h, h_adams, e, e_accepted, implicit)
             e_accepted = max(e, 1e-4)
     i_out = _fill_end(t, y, mode, t_out, i_out, y_out, mode_out, counters)
     return y_out, mode_out, events[:n_events].copy(), counters

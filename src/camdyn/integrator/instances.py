@@ -44,7 +44,7 @@ __all__ = ["MODEL_MODULES", "cache_root", "instance", "instance_key"]
 #: The integrator's modules that call a model (through ``systems``), written again per
 #: model; the others (counters, tableaus, linear algebra, tolerances, the inlining pass,
 #: the Ctrl-C poll) are shared.
-MODEL_MODULES = ("nordsieck", "steppers", "sampling", "crossings", "events", "multistep", "driver")
+MODEL_MODULES = ("nordsieck", "steppers", "sampling", "crossings", "events", "multistep", "implicit", "driver")
 #: The registry and the variational system (:mod:`camdyn.systems`), written again per
 #: model over the adapter, so that the model's variational system (state-transition
 #: matrix, saltation at events, parameter sensitivities) comes with its driver.

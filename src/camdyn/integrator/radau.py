@@ -42,10 +42,12 @@ from camdyn.integrator.inlining import InlinedPipeline
 from camdyn.integrator.radau_newton import (
     EPS,
     NEWTON_MAX,
+    RECORD_SIZE,
     STEP_CONVERGED,
     STEP_DIVERGED,
     STEP_SLOW,
     THETA_JACOBIAN,
+    WORK_ROWS,
     radau_dense,
     radau_dense_coefficients,
     radau_factor,
@@ -319,7 +321,8 @@ def radau_solve(rhs, jac, t0, y0, t_end, rtol, atol, first_step, max_steps, t_ou
     y, y1, err, f0 = y0.copy(), np.empty(n), np.empty(n), np.empty(n)
     jacobian, lu_real, lu_complex = np.zeros((n, n)), np.empty((n, n)), np.empty((n, n), dtype=np.complex128)
     pivots_real, pivots_complex = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
-    z, w, work, cwork = np.zeros((3, n)), np.empty((3, n)), np.empty((6, n)), np.empty((2, n), dtype=np.complex128)
+    z, w, cwork = np.zeros((3, n)), np.empty((3, n)), np.empty((2, n), dtype=np.complex128)
+    work, record = np.empty((WORK_ROWS, n)), np.empty(RECORD_SIZE)
     coefficients = np.empty((4, n))
     t, k_out = t0, _sample_start(t0, y0, t_out, y_out)
     h, last = _start(rhs, t, y, f0, t_end, p, rtol, atol, first_step, work, counters)
@@ -345,7 +348,7 @@ def radau_solve(rhs, jac, t0, y0, t_end, rtol, atol, first_step, max_steps, t_ou
             radau_start(h, h_old, y, coefficients, z, have_polynomial and not first)
             outcome, error, iterations, theta, faccon, factor, calls = radau_step(
                 rhs, t, y, f0, h, p, rtol, atol, n, newton_tolerance, faccon, first or rejected,
-                lu_real, pivots_real, lu_complex, pivots_complex, z, w, y1, err, work, cwork)
+                lu_real, pivots_real, lu_complex, pivots_complex, z, w, y1, err, work, cwork, record)
             counters[RADAU_RHS] += calls
             counters[RADAU_NEWTON] += iterations
             accepted, h_new = _controller(h, outcome, factor, error, iterations, first, counters[RADAU_ACCEPTED] > 0,

@@ -2,7 +2,9 @@
 iteration matrices and their factorization (:func:`radau_factor`), the collocation
 polynomial as dense output and as the Newton iteration's starting values
 (:func:`radau_dense_coefficients`, :func:`radau_dense`, :func:`radau_start`), the
-simplified Newton iteration and the embedded error estimate (:func:`radau_step`), as in
+simplified Newton iteration (:func:`newton_begin`, :func:`newton_continue`) and the
+embedded error estimate (:func:`radau_error`), composed into one step of a function
+``rhs`` by :func:`radau_step`, as in
 Hairer and Wanner's RADAU5 (its subroutines RADCOR, SLVRAD, ESTRAD and CONTR5 [1, 2]).
 The step-size logic is the caller's (:func:`camdyn.integrator.radau.radau_solve`).
 
@@ -54,8 +56,9 @@ from camdyn.integrator.radau_tableau import (
 from camdyn.integrator.tolerances import absolute_tolerance
 
 __all__ = [
-    "NEWTON_MAX", "THETA_JACOBIAN", "EPS", "STEP_CONVERGED", "STEP_SLOW", "STEP_DIVERGED", "radau_factor",
-    "radau_dense_coefficients", "radau_dense", "radau_start", "scaled_rms", "radau_step",
+    "NEWTON_MAX", "THETA_JACOBIAN", "EPS", "STEP_CONVERGED", "STEP_SLOW", "STEP_DIVERGED", "ITERATE", "RECORD_SIZE",
+    "WORK_ROWS", "radau_factor", "radau_dense_coefficients", "radau_dense", "radau_start", "scaled_rms",
+    "newton_begin", "newton_continue", "newton_summary", "radau_error", "radau_step",
 ]
 
 # Newton iteration constants (RADAU5's defaults, [2]).
@@ -69,7 +72,7 @@ STEP_SLOW = 1            # the iteration converges, too slowly for NEWTON_MAX: h
 STEP_DIVERGED = 2        # contraction >= 0.99, NEWTON_MAX reached, or a non-finite stage
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def radau_factor(jacobian, h, lu_real, pivots_real, lu_complex, pivots_complex):
     """Build and factor the two iteration matrices of a step of size ``h`` [s]:
     ``gamma / h I - J`` (real) and ``(alpha - i beta) / h I - J`` (complex), in place
@@ -105,7 +108,7 @@ def radau_factor(jacobian, h, lu_real, pivots_real, lu_complex, pivots_complex):
     return singular_real or singular_complex
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def radau_dense_coefficients(y0, z, coefficients):
     """Coefficients of the collocation polynomial of a step from ``y0`` with stage
     increments ``z`` (3 x n) into ``coefficients`` (4 x n): row 0 is ``y0``, rows 1-3
@@ -130,7 +133,7 @@ def radau_dense(theta, coefficients, out):
                                                                              + theta * coefficients[3, i]))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def radau_start(h, h_old, y, coefficients, z, have_polynomial):
     """Starting values ``z_i`` of the Newton iteration of a step of ``h`` [s] from ``y``:
     the last step's collocation polynomial (step ``h_old`` [s]) extrapolated to the new
@@ -161,149 +164,183 @@ def scaled_rms(v, y0, y1, rtol, atol, controlled):
     return math.sqrt(acc / controlled)
 
 
-# The functions that take ``rhs`` (here and in camdyn.integrator.radau) are compiled per
-# function passed and not cached: numba's cache keys a function argument by its
-# identity, which changes with every process (see numba's issue tracker on caching
-# first-class functions), so each run would compile again anyway and leave one more file
-# in __pycache__ (measured here: the second process recompiled radau_solve, about 10 s on
-# the shared 2-core machine). The helpers of radau_step and radau_solve are inlined into
-# them (``inline="always"``, compiled by camdyn.integrator.inlining's pipeline, which
-# removes the inlined arguments' reference-counted copies): called, they made radau_solve
-# about 1.5 times slower than the same code written in one function (measured on Van der
-# Pol and Robertson at rtol 1e-8); inlined, it runs as fast.
-@numba.njit(cache=False, inline="always")
-def _newton_increment(rhs, t, y, h, p, z, w, lu_real, pivots_real, lu_complex, pivots_complex,
-                      fs, yt, dw_real, r_complex, dw_complex):
-    """One simplified Newton increment at the stage increments ``z`` (with ``w = T^-1
-    z``): ``F`` at the three stages into ``fs`` (3 x n), the residuals ``r_1`` into
-    ``yt`` and ``r_2 + i r_3`` into ``r_complex``, and the solves of the real and the
-    complex system into ``dw_real`` and ``dw_complex`` ([1], IV.8; RADAU5's SLVRAD).
-    Three right-hand-side calls; returns False, before the solves, if a stage value is
-    not finite."""
+# Slots of the Newton iteration's record (:func:`newton_begin`, :func:`newton_continue`).
+_ITERATIONS = 0       # iterations done
+_THETA = 1            # contraction rate [-]
+_QUOTIENT_OLD = 2     # the last quotient of successive increment norms [-]
+_NORM_OLD = 3         # the last increment norm [-]
+_FACCON = 4           # eta [-]
+_FACTOR = 5           # RADAU5's reduction of h after a failed iteration [-]
+RECORD_SIZE = 6
+#: :func:`newton_continue`'s verdict that the iteration goes on: evaluate ``f`` at the
+#: new stage states.
+ITERATE = -1
+#: Rows of the real scratch array ``work`` (9 x n) of a step.
+WORK_ROWS = 9
+_STAGE_STATES = 3     # rows 3-5: the states y + z_i at which f is evaluated next
+_YT = 6               # a right-hand side being solved for
+_DW_REAL = 7          # the increment of the real system
+_RHS_ERR = 8          # sum_i e_i z_i / h of the error estimate
+
+
+# The stepping is split so that no function here calls the right-hand side: a caller
+# (:func:`radau_step` for a function ``rhs``, camdyn.integrator.implicit for a system of
+# the registry) evaluates ``f`` at the stage states each iteration asks for. A compiled
+# function that takes another as an argument cannot be cached by numba (its cache keys a
+# function argument by its identity, which changes with every process), and neither can
+# one that passes a compiled function as a value: the driver, which must be cached,
+# calls only these pieces.
+@numba.njit(cache=True, inline="always")
+def _stage_states(y, z, work):
+    """The states ``y + z_i`` of the three stages into ``work[3:6]``."""
+    for s in range(3):
+        for i in range(y.shape[0]):
+            work[_STAGE_STATES + s, i] = y[i] + z[s, i]
+
+
+@numba.njit(cache=True, inline="always")
+def newton_begin(y, z, w, faccon, record, work):
+    """Start the simplified Newton iteration of a step from ``y`` at the starting values
+    ``z`` (3 x n, :func:`radau_start`): ``W = T^-1 Z`` into ``w``, the ``record``
+    (:data:`RECORD_SIZE`) reset with ``eta = max(faccon, eps)^0.8`` ([1], IV.8; RADAU5's
+    FACCON), and the stage states at which the caller evaluates ``f`` next into rows 3-5
+    of ``work`` (its values at stage ``i`` go into row ``i``: :func:`newton_continue`)."""
     n = y.shape[0]
+    for s in range(3):
+        for i in range(n):
+            w[s, i] = RADAU_TI[s, 0] * z[0, i] + RADAU_TI[s, 1] * z[1, i] + RADAU_TI[s, 2] * z[2, i]
+    record[_ITERATIONS] = 0.0
+    record[_THETA] = THETA_JACOBIAN
+    record[_QUOTIENT_OLD] = 0.0
+    record[_NORM_OLD] = 0.0
+    record[_FACCON] = max(faccon, EPS) ** 0.8
+    record[_FACTOR] = 1.0
+    _stage_states(y, z, work)
+
+
+@numba.njit(cache=True, inline="always")
+def _increment(h, w, lu_real, pivots_real, lu_complex, pivots_complex, work, cwork):
+    """The simplified Newton increment from the stage values ``F`` in ``work[0:3]``: the
+    residuals ``r_1`` and ``r_2 + i r_3`` and the solves of the real and the complex
+    system into ``work[7]`` and ``cwork[1]`` ([1], IV.8; RADAU5's SLVRAD)."""
     g = RADAU_GAMMA / h
     a = RADAU_ALPHA / h
     b = RADAU_BETA / h
-    finite = True
-    for s in range(3):
-        for i in range(n):
-            yt[i] = y[i] + z[s, i]
-        rhs(t + RADAU_C[s] * h, yt, p, fs[s])
-        for i in range(n):
-            if not math.isfinite(fs[s, i]):
-                finite = False
-    if not finite:
-        return False
-    for i in range(n):
-        t0 = RADAU_TI[0, 0] * fs[0, i] + RADAU_TI[0, 1] * fs[1, i] + RADAU_TI[0, 2] * fs[2, i]
-        t1 = RADAU_TI[1, 0] * fs[0, i] + RADAU_TI[1, 1] * fs[1, i] + RADAU_TI[1, 2] * fs[2, i]
-        t2 = RADAU_TI[2, 0] * fs[0, i] + RADAU_TI[2, 1] * fs[1, i] + RADAU_TI[2, 2] * fs[2, i]
+    yt = work[_YT]
+    r_complex = cwork[0]
+    for i in range(w.shape[1]):
+        t0 = RADAU_TI[0, 0] * work[0, i] + RADAU_TI[0, 1] * work[1, i] + RADAU_TI[0, 2] * work[2, i]
+        t1 = RADAU_TI[1, 0] * work[0, i] + RADAU_TI[1, 1] * work[1, i] + RADAU_TI[1, 2] * work[2, i]
+        t2 = RADAU_TI[2, 0] * work[0, i] + RADAU_TI[2, 1] * work[1, i] + RADAU_TI[2, 2] * work[2, i]
         yt[i] = t0 - g * w[0, i]                        # r_1
         r_complex[i] = complex(t1 - a * w[1, i] - b * w[2, i],   # r_2 + i r_3
                                t2 + b * w[1, i] - a * w[2, i])
-    lu_solve(lu_real, pivots_real, yt, dw_real)
-    lu_solve(lu_complex, pivots_complex, r_complex, dw_complex)
-    return True
+    lu_solve(lu_real, pivots_real, yt, work[_DW_REAL])
+    lu_solve(lu_complex, pivots_complex, r_complex, cwork[1])
 
 
-@numba.njit(cache=False, inline="always")
-def _newton_iteration(rhs, t, y, h, p, rtol, atol, controlled, newton_tolerance, faccon,
-                      lu_real, pivots_real, lu_complex, pivots_complex, z, w, work, cwork):
-    """The simplified Newton iteration of a step from the starting values in ``z`` to the
-    converged stage increments in ``z`` ([1], IV.8; RADAU5's RADCOR): it stops when
-    ``eta ||dW|| <= kappa Tol``, gives up when the contraction ``theta`` reaches 0.99 or
-    ``NEWTON_MAX`` iterations, and when the contraction predicts no convergence within
-    ``NEWTON_MAX`` iterations it returns RADAU5's reduction of ``h``. Arguments as those
-    of :func:`radau_step`; returns ``(outcome, iterations, theta, faccon, factor,
-    calls)``."""
+@numba.njit(cache=True, inline="always")
+def newton_continue(y, h, rtol, atol, controlled, newton_tolerance, lu_real, pivots_real, lu_complex,
+                    pivots_complex, z, w, record, work, cwork):
+    """One iteration of the simplified Newton iteration ([1], IV.8; RADAU5's RADCOR),
+    from ``F``, the right-hand side at the stage states, in ``work[0:3]``: the increment,
+    its norm and the contraction ``theta``, and ``Z`` and ``W`` updated. It stops when
+    ``eta ||dW|| <= kappa Tol`` (``newton_tolerance``), gives up when ``theta`` reaches
+    0.99, when ``F`` is not finite or after ``NEWTON_MAX`` iterations, and when
+    ``theta`` predicts no convergence within ``NEWTON_MAX`` iterations it gives up with
+    RADAU5's reduction of ``h`` (``record``'s factor).
+
+    Returns
+    -------
+    outcome : int
+        :data:`ITERATE` (the next stage states are in ``work[3:6]``),
+        ``STEP_CONVERGED``, ``STEP_SLOW`` or ``STEP_DIVERGED``.
+    """
     n = y.shape[0]
-    fs = work[0:3]
-    yt = work[3]
-    dw_real = work[4]
-    r_complex = cwork[0]
+    for s in range(3):
+        for i in range(n):
+            if not math.isfinite(work[s, i]):
+                record[_FACTOR] = 0.5
+                return STEP_DIVERGED
+    _increment(h, w, lu_real, pivots_real, lu_complex, pivots_complex, work, cwork)
+    dw_real = work[_DW_REAL]
     dw_complex = cwork[1]
-    for s in range(3):   # W = T^-1 Z
+    record[_ITERATIONS] += 1.0
+    iterations = int(record[_ITERATIONS])
+    acc = 0.0   # ||dW||: RMS over the three stages, scaled by the step's start
+    for i in range(controlled):
+        sc = absolute_tolerance(atol, i) + rtol * abs(y[i])
+        acc += (dw_real[i] / sc) ** 2 + (dw_complex[i].real / sc) ** 2 + (dw_complex[i].imag / sc) ** 2
+    norm = math.sqrt(acc / (3 * controlled))
+    if 1 < iterations < NEWTON_MAX:
+        quotient = norm / record[_NORM_OLD]
+        theta = quotient if iterations == 2 else math.sqrt(quotient * record[_QUOTIENT_OLD])
+        record[_THETA] = theta
+        record[_QUOTIENT_OLD] = quotient
+        if theta >= 0.99:
+            record[_FACTOR] = 0.5
+            return STEP_DIVERGED
+        record[_FACCON] = theta / (1.0 - theta)
+        # predicted ||dW|| after the remaining iterations, against the tolerance
+        predicted = record[_FACCON] * norm * theta ** (NEWTON_MAX - 1 - iterations) / newton_tolerance
+        if predicted >= 1.0:
+            q = max(1e-4, min(20.0, predicted))
+            record[_FACTOR] = 0.8 * q ** (-1.0 / (4.0 + NEWTON_MAX - 1 - iterations))
+            return STEP_SLOW
+    record[_NORM_OLD] = max(norm, EPS)
+    for i in range(n):
+        w[0, i] += dw_real[i]
+        w[1, i] += dw_complex[i].real
+        w[2, i] += dw_complex[i].imag
+    for s in range(3):   # Z = T W
         for i in range(n):
-            w[s, i] = RADAU_TI[s, 0] * z[0, i] + RADAU_TI[s, 1] * z[1, i] + RADAU_TI[s, 2] * z[2, i]
-    faccon = max(faccon, EPS) ** 0.8
-    theta = THETA_JACOBIAN
-    theta_quotient_old = 0.0
-    norm_old = 0.0
-    calls = 0
-    iterations = 0
-    while True:
-        if iterations >= NEWTON_MAX:
-            return STEP_DIVERGED, iterations, theta, faccon, 0.5, calls
-        finite = _newton_increment(rhs, t, y, h, p, z, w, lu_real, pivots_real, lu_complex, pivots_complex,
-                                   fs, yt, dw_real, r_complex, dw_complex)
-        calls += 3
-        if not finite:
-            return STEP_DIVERGED, iterations, theta, faccon, 0.5, calls
-        iterations += 1
-        acc = 0.0   # ||dW||: RMS over the three stages, scaled by the step's start
-        for i in range(controlled):
-            sc = absolute_tolerance(atol, i) + rtol * abs(y[i])
-            acc += (dw_real[i] / sc) ** 2 + (dw_complex[i].real / sc) ** 2 + (dw_complex[i].imag / sc) ** 2
-        norm = math.sqrt(acc / (3 * controlled))
-        if 1 < iterations < NEWTON_MAX:
-            quotient = norm / norm_old
-            theta = quotient if iterations == 2 else math.sqrt(quotient * theta_quotient_old)
-            theta_quotient_old = quotient
-            if theta < 0.99:
-                faccon = theta / (1.0 - theta)
-                # predicted ||dW|| after the remaining iterations, against the tolerance
-                predicted = faccon * norm * theta ** (NEWTON_MAX - 1 - iterations) / newton_tolerance
-                if predicted >= 1.0:
-                    q = max(1e-4, min(20.0, predicted))
-                    factor = 0.8 * q ** (-1.0 / (4.0 + NEWTON_MAX - 1 - iterations))
-                    return STEP_SLOW, iterations, theta, faccon, factor, calls
-            else:
-                return STEP_DIVERGED, iterations, theta, faccon, 0.5, calls
-        norm_old = max(norm, EPS)
-        for i in range(n):
-            w[0, i] += dw_real[i]
-            w[1, i] += dw_complex[i].real
-            w[2, i] += dw_complex[i].imag
-        for s in range(3):   # Z = T W
-            for i in range(n):
-                z[s, i] = RADAU_T[s, 0] * w[0, i] + RADAU_T[s, 1] * w[1, i] + RADAU_T[s, 2] * w[2, i]
-        if faccon * norm <= newton_tolerance:
-            return STEP_CONVERGED, iterations, theta, faccon, 1.0, calls
+            z[s, i] = RADAU_T[s, 0] * w[0, i] + RADAU_T[s, 1] * w[1, i] + RADAU_T[s, 2] * w[2, i]
+    if record[_FACCON] * norm <= newton_tolerance:
+        return STEP_CONVERGED
+    if iterations >= NEWTON_MAX:
+        record[_FACTOR] = 0.5
+        return STEP_DIVERGED
+    _stage_states(y, z, work)
+    return ITERATE
 
 
-@numba.njit(cache=False, inline="always")
-def _error_estimate(rhs, t, y, f0, y1, z, h, p, rtol, atol, controlled, refine, lu_real, pivots_real, err, work):
+@numba.njit(cache=True, inline="always")
+def newton_summary(record):
+    """``(iterations, theta, faccon, factor)`` of a finished iteration: the iterations
+    done, the contraction rate [-] (0.001 after a single iteration), ``eta = theta / (1 -
+    theta)`` for the next step [-] and the reduction of ``h`` after a failure [-]."""
+    return int(record[_ITERATIONS]), record[_THETA], record[_FACCON], record[_FACTOR]
+
+
+@numba.njit(cache=True, inline="always")
+def radau_error(y, f_start, y1, z, h, rtol, atol, controlled, lu_real, pivots_real, err, work):
     """RADAU5's embedded error estimate (ESTRAD) of a converged step into ``err`` [state
-    units]: ``err = (gamma/h I - J)^-1 (f(t, y) + sum_i e_i z_i / h) = (I - h gamma_0
-    J)^-1 (gamma_0 h f(t, y) + gamma_0 sum_i e_i z_i)``, and with ``refine``, if that
-    rejects the step, filtered once more through ``f(t, y + err)`` in place of ``f(t,
-    y)``. Returns its scaled RMS norm (``>= 1e-10``) [-] and the right-hand-side calls."""
+    units]: ``err = (gamma/h I - J)^-1 (f_start + sum_i e_i z_i / h)`` with ``f_start =
+    f(t, y)``. Returns its scaled RMS norm (``>= 1e-10``) [-].
+
+    Where that rejects the step (after a rejection, or on the first step) RADAU5 filters
+    it once more: the same formula with ``f(t, y + err)`` as ``f_start`` tends to the
+    correct value also for stiff components where ``h J`` is large."""
     n = y.shape[0]
-    yt = work[3]
-    rhs_err = work[5]
-    calls = 0
+    yt = work[_YT]
+    rhs_err = work[_RHS_ERR]
     for i in range(n):
         rhs_err[i] = (RADAU_E[0] * z[0, i] + RADAU_E[1] * z[1, i] + RADAU_E[2] * z[2, i]) / h
-        yt[i] = f0[i] + rhs_err[i]
+        yt[i] = f_start[i] + rhs_err[i]
     lu_solve(lu_real, pivots_real, yt, err)
-    error = max(scaled_rms(err, y, y1, rtol, atol, controlled), 1e-10)
-    if error >= 1.0 and refine:
-        # the estimate filtered once more, through f(t, y + err) in place of f(t, y): it
-        # tends to the correct value also for stiff components where h J is large
-        for i in range(n):
-            yt[i] = y[i] + err[i]
-        rhs(t, yt, p, work[0])
-        calls += 1
-        for i in range(n):
-            yt[i] = work[0, i] + rhs_err[i]
-        lu_solve(lu_real, pivots_real, yt, err)
-        error = max(scaled_rms(err, y, y1, rtol, atol, controlled), 1e-10)
-    return error, calls
+    return max(scaled_rms(err, y, y1, rtol, atol, controlled), 1e-10)
 
 
+# radau_step takes ``rhs`` and is compiled per function passed and not cached (see the
+# note above; measured here: the second process recompiled radau_solve, about 10 s on the
+# shared 2-core machine); it and radau_solve inline their helpers (``inline="always"``,
+# camdyn.integrator.inlining's pipeline removes the inlined arguments'
+# reference-counted copies): called, they made radau_solve about 1.5 times slower than
+# the same code written in one function (measured on Van der Pol and Robertson at rtol
+# 1e-8); inlined, it runs as fast.
 @numba.njit(cache=False, pipeline_class=InlinedPipeline)
 def radau_step(rhs, t, y, f0, h, p, rtol, atol, controlled, newton_tolerance, faccon, refine,
-               lu_real, pivots_real, lu_complex, pivots_complex, z, w, y1, err, work, cwork):
+               lu_real, pivots_real, lu_complex, pivots_complex, z, w, y1, err, work, cwork, record):
     """One attempted Radau IIA step of size ``h`` [s] from ``(t, y)`` with the LU
     factorizations of :func:`radau_factor` for this ``h`` (the step-size logic is the
     caller's: :func:`camdyn.integrator.radau.radau_solve` is RADAU5's).
@@ -327,8 +364,7 @@ def radau_step(rhs, t, y, f0, h, p, rtol, atol, controlled, newton_tolerance, fa
     newton_tolerance : float
         ``kappa Tol`` of the stopping test ``eta ||dW|| <= kappa Tol`` [-].
     faccon : float
-        ``eta`` of the last step's iteration [-] (1 at the start of an integration);
-        this step starts from ``max(eta, eps)^0.8`` ([1], IV.8; RADAU5's FACCON).
+        ``eta`` of the last step's iteration [-] (1 at the start of an integration).
     refine : bool
         Whether to evaluate the error estimate a second time from ``f(t, y + err)``
         when the first one rejects the step (after a rejection or on the first step;
@@ -342,11 +378,12 @@ def radau_step(rhs, t, y, f0, h, p, rtol, atol, controlled, newton_tolerance, fa
         Scratch (the transformed increments ``W``).
     y1, err : ndarray, shape (n,)
         Receive ``y + z_3`` and the error estimate [state units].
-    work : ndarray, shape (6, n)
-        Scratch: stage values ``F`` (rows 0-2), the stage state, the increment of the real
-        system and the filtered estimate's right-hand side.
+    work : ndarray, shape (9, n)
+        Scratch (:data:`WORK_ROWS`).
     cwork : ndarray, shape (2, n), complex128
         Scratch of the complex system.
+    record : ndarray, shape (6,)
+        Scratch: the iteration's record (:data:`RECORD_SIZE`).
 
     Returns
     -------
@@ -365,13 +402,25 @@ def radau_step(rhs, t, y, f0, h, p, rtol, atol, controlled, newton_tolerance, fa
     calls : int
         Right-hand-side evaluations.
     """
-    outcome, iterations, theta, faccon, factor, calls = _newton_iteration(
-        rhs, t, y, h, p, rtol, atol, controlled, newton_tolerance, faccon,
-        lu_real, pivots_real, lu_complex, pivots_complex, z, w, work, cwork)
+    newton_begin(y, z, w, faccon, record, work)
+    outcome = ITERATE
+    calls = 0
+    while outcome == ITERATE:
+        for s in range(3):
+            rhs(t + RADAU_C[s] * h, work[_STAGE_STATES + s], p, work[s])
+        calls += 3
+        outcome = newton_continue(y, h, rtol, atol, controlled, newton_tolerance, lu_real, pivots_real, lu_complex,
+                                  pivots_complex, z, w, record, work, cwork)
+    iterations, theta, faccon, factor = newton_summary(record)
     if outcome != STEP_CONVERGED:
         return outcome, 0.0, iterations, theta, faccon, factor, calls
     for i in range(y.shape[0]):
         y1[i] = y[i] + z[2, i]
-    error, refine_calls = _error_estimate(rhs, t, y, f0, y1, z, h, p, rtol, atol, controlled, refine,
-                                          lu_real, pivots_real, err, work)
-    return STEP_CONVERGED, error, iterations, theta, faccon, 1.0, calls + refine_calls
+    error = radau_error(y, f0, y1, z, h, rtol, atol, controlled, lu_real, pivots_real, err, work)
+    if error >= 1.0 and refine:
+        for i in range(y.shape[0]):
+            work[_YT, i] = y[i] + err[i]
+        rhs(t, work[_YT], p, work[0])
+        calls += 1
+        error = radau_error(y, work[0], y1, z, h, rtol, atol, controlled, lu_real, pivots_real, err, work)
+    return STEP_CONVERGED, error, iterations, theta, faccon, 1.0, calls

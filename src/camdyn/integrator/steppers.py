@@ -16,6 +16,7 @@ import numba
 
 from camdyn.integrator.linalg import lu_factor, lu_solve
 from camdyn.integrator.nordsieck import nordsieck_dense
+from camdyn.integrator.radau_newton import radau_dense
 from camdyn.integrator.tableaus import (
     D8_A,
     D8_A_FROM,
@@ -98,6 +99,7 @@ KIND_DP5 = 0
 KIND_HERMITE = 1
 KIND_DOP853 = 2
 KIND_NORDSIECK = 3
+KIND_RADAU = 4
 
 
 @numba.njit(cache=True, inline="always")
@@ -141,7 +143,9 @@ def dense(tau, h, y0, f0, y1, f1, work, kind, out):
     (stages k2..k6 are still in ``work[1:6]``); Rosenbrock steps (1) the cubic Hermite
     interpolant; DOP853 steps (2) their 7th-order extension, whose coefficients
     :func:`dop853_extend` has put in ``work[0:7]``; Adams steps (3) their Nordsieck
-    polynomial (``work`` is the history of :mod:`camdyn.integrator.nordsieck`).
+    polynomial (``work`` is the history of :mod:`camdyn.integrator.nordsieck`); Radau IIA
+    steps (4) their collocation polynomial, whose coefficients
+    :func:`camdyn.integrator.implicit.implicit_step` has put in ``work[0:4]``.
     """
     if kind == KIND_HERMITE:
         hermite(tau, h, y0, f0, y1, f1, out)
@@ -152,6 +156,9 @@ def dense(tau, h, y0, f0, y1, f1, work, kind, out):
         return
     if kind == KIND_DOP853:
         dop853_dense(tau, y0, work, out)
+        return
+    if kind == KIND_RADAU:
+        radau_dense(tau, work, out)
         return
     t2 = tau * tau
     t3 = t2 * tau

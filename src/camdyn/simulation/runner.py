@@ -32,7 +32,8 @@ from camdyn.systems.protocol import BoundModel, Model
 __all__ = ["simulate", "prepare", "impact_table", "Prepared", "penetration_resolution", "run_dataset"]
 
 METHODS = {"auto": driver.METHOD_AUTO, "explicit": driver.METHOD_EXPLICIT,
-           "dop853": driver.METHOD_DOP853, "rosenbrock": driver.METHOD_ROSENBROCK}
+           "dop853": driver.METHOD_DOP853, "rosenbrock": driver.METHOD_ROSENBROCK, "radau": driver.METHOD_RADAU,
+           "switching": driver.METHOD_SWITCHING}
 
 
 class Prepared:
