@@ -133,3 +133,27 @@ def test_the_spectral_radius_estimate_is_within_ten_percent(stiffness, damping):
     estimate = spectral_radius(jacobian, np.empty(3), np.empty(3))
     assert abs(estimate / exact - 1.0) < 0.1, (estimate, exact)
 
+
+
+def test_the_variational_jacobian_acts_on_the_columns_of_phi():
+    # Phi' = J Phi is linear in Phi, so the Jacobian's columns for Phi's entries are the
+    # right-hand side's exact response to a unit change of each entry (a difference of two
+    # right-hand sides, computed here); the chapter 4 rig in contact, a random Phi
+    prep = prepare(_friction_rig())
+    n = 3
+    system = systems.VARIATIONAL + systems.CAM_FOLLOWER
+    size = systems.state_size(system)
+    rng = np.random.default_rng(7)
+    y = np.concatenate([prep.y0 + np.array([1e-5, 0.3, 0.0]), rng.normal(size=n * n)])
+    mode = np.zeros(systems.mode_size(system))
+    systems.initial_mode(system, 0.0, y, prep.p, mode)
+    f0 = np.empty(size)
+    systems.rhs(system, 0.0, y, mode, prep.p, f0)
+    jac = np.empty((size, size))
+    systems.jacobian(system, 0.0, y, f0, mode, prep.p, jac)
+    moved = np.empty(size)
+    for index in range(n, size):
+        probe = y.copy()
+        probe[index] += 1.0
+        systems.rhs(system, 0.0, probe, mode, prep.p, moved)
+        np.testing.assert_allclose(jac[n:, index], (moved - f0)[n:], rtol=1e-6, atol=1e-6 * np.abs(jac).max())

@@ -214,7 +214,7 @@ def rosenbrock_step(system, t, y, f0, h, mode, p, work, stages, matrix, pivots, 
     """Linearly implicit RODAS4 step.
 
     The Jacobian comes from the system (:func:`camdyn.systems.registry.jacobian`), the time
-    derivative of the right-hand side from a forward difference. ``work`` and ``stages``
+    derivative of the right-hand side from a central difference. ``work`` and ``stages``
     are (6, n) scratch arrays, ``matrix`` (n, n) and ``pivots`` (n,) the iteration
     matrix ``I / (gamma h) - J`` and its LU factorization's row swaps. Returns the number
     of right-hand-side calls (a singular iteration matrix makes ``err`` infinite, so the
@@ -232,11 +232,17 @@ def rosenbrock_step(system, t, y, f0, h, mode, p, work, stages, matrix, pivots, 
             matrix[i, j] = -matrix[i, j]
         matrix[i, i] += c
     singular = lu_factor(matrix, pivots)
-    epst = 1.5e-8 * max(abs(t), 1e-3)
+    # df/dt by a central difference at a millionth of the step (at least 64 ulp of t),
+    # divided by the span as represented: the forward difference at 1.5e-8 max(t, 1e-3)
+    # it replaces grew with t, and the steps of the chapter 4 rig grew with it, from 1,561
+    # per revolution in the first to 7,100 on average over 30 (a constant 1,135 with this)
+    epst = max(1e-6 * h, 64.0 * 2.220446049250313e-16 * max(abs(t), 1.0))
     systems.rhs(system, t + epst, y, mode, p, fe)
+    systems.rhs(system, t - epst, y, mode, p, r)
+    span = (t + epst) - (t - epst)
     for i in range(n):
-        dfdt[i] = (fe[i] - f0[i]) / epst
-    calls = 1
+        dfdt[i] = (fe[i] - r[i]) / span
+    calls = 2
     for s in range(RB_STAGES):
         if s == 0:
             for i in range(n):

@@ -300,16 +300,24 @@ def _carried_jump(model, count, k, t, y, mode, p):
 
 @numba.njit(cache=True)
 def jacobian(model, count, t, y, f0, mode, p, jac):
-    """The block-diagonal part ``diag(J, J, ..., J)`` (the term ``d(J Phi)/dy`` left out:
-    the variational system is integrated by explicit steppers)."""
+    """The block-diagonal part: ``J`` on the state and on each column of ``Phi`` and of the
+    parameter sensitivities, laid out as :func:`rhs` stores them (``Phi``'s column ``c``
+    strided by ``n``, a sensitivity contiguous). The coupling ``d(J Phi)/dy`` and the
+    carried field are left out: an implicit stepper's simplified Newton iteration
+    converges with this approximation, to the same solution."""
     n = models.state_size(model)
     block = np.empty((n, n))
     models.jacobian(model, t, y[:n], f0[:n], mode, p, block)
     jac[:, :] = 0.0
-    for b in range(n + 1 + count):
+    for i in range(n):
+        for k in range(n):
+            jac[i, k] = block[i, k]
+    for c in range(n + count):
+        column = n + c * n if c >= n else n + c   # as in rhs
+        stride = 1 if c >= n else n
         for i in range(n):
-            for j in range(n):
-                jac[b * n + i, b * n + j] = block[i, j]
+            for k in range(n):
+                jac[column + i * stride, column + k * stride] = block[i, k]
 
 
 @numba.njit(cache=True)
