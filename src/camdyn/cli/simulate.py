@@ -167,7 +167,7 @@ def simulate(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"),
              sample_rate: str = typer.Option("20kHz", help="Output sampling rate."),
              out: Optional[Path] = typer.Option(None, help="Write the results to this netCDF file (.nc)."),
              plot: Optional[Path] = typer.Option(None, help="Write a time-history figure (.png, .pdf, .svg, ...)."),
-             method: str = typer.Option("auto", help="auto, explicit or rosenbrock."),
+             method: str = typer.Option("auto", help="auto, dop853, explicit, rosenbrock, radau or switching."),
              rtol: Optional[float] = typer.Option(None, help="Relative tolerance (default 1e-8; 1e-10 for a "
                                                             "translating follower)."),
              force: bool = ForceOption,

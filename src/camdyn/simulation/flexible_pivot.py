@@ -194,8 +194,8 @@ def simulate_flexible_pivot(system: System, pivot_stiffness: float, pivot_dampin
         Output sampling rate [Hz].
     rtol, atol : float
         Local error tolerances: relative [-] and absolute [rad, rad/s, m, m/s].
-    method : {"auto", "dop853", "explicit", "rosenbrock"}
-        Stepper choice (``auto``: DOP853).
+    method : {"auto", "dop853", "explicit", "rosenbrock", "radau", "switching"}
+        Stepper choice (``auto``: DOP853), as in :func:`camdyn.simulate`.
     max_step : float, optional
         Largest step [s]; default 1/12 of the cam period (guards checked every 1/32).
 

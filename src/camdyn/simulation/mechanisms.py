@@ -200,8 +200,8 @@ def simulate_driven_cam(system: System, drive: CamDrive, revolutions: float = 5.
         Starting cam speed [rad/s]; default ``system.motion``'s angular speed.
     rtol, atol : float
         Local error tolerances: relative [-] and absolute [rad, rad/s, J].
-    method : {"auto", "dop853", "explicit", "rosenbrock"}
-        Stepper choice (``auto``: DOP853).
+    method : {"auto", "dop853", "explicit", "rosenbrock", "radau", "switching"}
+        Stepper choice (``auto``: DOP853), as in :func:`camdyn.simulate`.
     max_step : float, optional
         Largest step [s]; default 1/12 of the starting period (guards checked every 1/32).
 
@@ -276,8 +276,8 @@ def simulate_stick_slip(mass: float, stiffness: float, belt_speed: float, static
         Output sampling rate [Hz].
     rtol, atol : float
         Local error tolerances: relative [-] and absolute [m, m/s].
-    method : {"auto", "dop853", "explicit", "rosenbrock"}
-        Stepper choice.
+    method : {"auto", "dop853", "explicit", "rosenbrock", "radau", "switching"}
+        Stepper choice, as in :func:`camdyn.simulate`.
 
     Returns
     -------
@@ -390,8 +390,8 @@ def simulate_tabulated(system: System, times, angles, periods: float = 5.0, dura
         Output sampling rate [Hz].
     rtol, atol : float
         Local error tolerances: relative [-] and absolute [rad, rad/s].
-    method : {"auto", "dop853", "explicit", "rosenbrock"}
-        Stepper choice.
+    method : {"auto", "dop853", "explicit", "rosenbrock", "radau", "switching"}
+        Stepper choice, as in :func:`camdyn.simulate`.
     variables : sequence of str, optional
         As :func:`camdyn.simulate`.
 
