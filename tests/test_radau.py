@@ -146,7 +146,8 @@ def fixed_steps(p, y0, t_end, steps, mid=False):
         assert not radau_factor(jacobian, h, lu_r, piv_r, lu_c, piv_c)
         radau_start(h, h, y, coefficients, z, k > 0)
         outcome, _, its, _, faccon, _, _ = radau_step(rhs, t, y, f0, h, p, 1e-12, 1e-12, n, 1e-3, faccon, False,
-                                                       lu_r, piv_r, lu_c, piv_c, z, w, y1, err, work, cwork, np.empty(6))
+                                                       lu_r, piv_r, lu_c, piv_c, z, w, y1, err, work, cwork,
+                                                       np.empty(6))
         assert outcome == STEP_CONVERGED
         iterations += its
         radau_dense_coefficients(y, z, coefficients)
