@@ -211,9 +211,9 @@ def test_dop853_driver_global_error_follows_rtol():
     (driver.METHOD_DOP853, 12, 0, False),
     # Dormand-Prince 5(4): 7 stages, FSAL: 6 new evaluations per attempt
     (driver.METHOD_EXPLICIT, 6, 0, False),
-    # RODAS4: 5 new stage evaluations and one for df/dt (a forward difference) per
+    # RODAS4: 5 new stage evaluations and two for df/dt (a central difference) per
     # attempt, one Jacobian per attempt, and f(t + h, y1) after each accepted step
-    (driver.METHOD_ROSENBROCK, 6, 1, True),
+    (driver.METHOD_ROSENBROCK, 7, 1, True),
 ])
 def test_work_counters(method, per_attempt, per_accepted, jacobians):
     # the overdamped oscillator (zeta = 2) from y = 1 at rest decays without crossing

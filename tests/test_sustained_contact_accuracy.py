@@ -66,7 +66,7 @@ def test_sustained_contact_error_falls_at_every_rung():
     # relative to its amplitude, falls at every half decade of rtol from 1e-5 to 1e-10
     # (atol = 1e-4 rtol [rad, rad/s], the work-precision benchmark's setting) and stays
     # below rtol. Without the proportional-integral step control of the DOP853 steps
-    # (driver._stabilized) the rungs 1e-5 and 3e-6 refused 23 and 54 steps per
+    # (camdyn.integrator.control.stabilized) the rungs 1e-5 and 3e-6 refused 23 and 54 steps per
     # revolution on an Intel Xeon, hunting where the contact's eigenvalues
     # (-120 +- 6000i 1/s) meet DOP853's stability boundary, and their errors (1.9e-7,
     # 2.6e-7) did not fall (docs/integrator.md, *Accuracy in sustained contact*).

@@ -39,6 +39,7 @@ import math
 import numba
 import numpy as np
 
+from camdyn.integrator.control import STEP_FAILED, STEP_RETRY, stabilized, verdict
 from camdyn.integrator.counters import (
     COUNT_ACCEPTED,
     COUNT_BDF,
@@ -126,13 +127,6 @@ METHOD_ADAMS = 4  # variable-order Adams-Moulton, Nordsieck form, functional ite
 METHOD_MULTISTEP = 5  # Adams and BDF in Nordsieck form, switched automatically
 METHOD_RADAU = 6  # Radau IIA of order 5 (RADAU5's method), camdyn.integrator.implicit
 METHOD_SWITCHING = 7  # DOP853, and Radau IIA from stiffness detection to the next event
-#: Weight of the last accepted step's error norm in the step-size control of DOP853 steps
-#: controlled by their 5th-order estimate alone (:func:`_stabilized`) [-].
-STABILIZATION = 0.04
-
-STEP_ACCEPTED = 0  # verdicts on a trial step
-STEP_RETRY = 1
-STEP_FAILED = 2
 
 
 
@@ -159,10 +153,12 @@ def _allocate(system, y_start, n_out, max_events):
 
 
 @numba.njit(cache=True, inline="always")
-def _workspace(n, m):
+def _workspace(n, columns):
     """Scratch arrays of one run: stepper stages, the Rosenbrock iteration matrix and its
     pivots, the Adams history, states [n], guard values [m], the guard scan's, and what
-    Radau IIA keeps between steps (:func:`camdyn.integrator.implicit.implicit_workspace`)."""
+    Radau IIA keeps between steps (:func:`camdyn.integrator.implicit.implicit_workspace`);
+    ``columns`` is the event log's past its fixed columns, ``m + n``."""
+    m = columns - n
     history = np.zeros((history_rows(n), n))
     history[TIME, 0] = np.nan   # no history yet: the first Adams step starts at order 1
     stage_arrays = (np.empty((6, n)), np.empty((6, n)), np.empty((16, n)), np.empty((7, n)), np.empty(n),
@@ -286,35 +282,6 @@ def _trial_step(system, method, t, y, f, h, mode, p, rtol, atol, work, stages, m
 
 
 @numba.njit(cache=True, inline="always")
-def _verdict(t, h, e, order, y1, counters):
-    """Accept or refuse the step of ``h`` [s] with error norm ``e``.
-
-    Returns
-    -------
-    h : float
-        The step [s] to retry with after a refusal, else ``h``.
-    verdict : int
-        ``STEP_ACCEPTED``, ``STEP_RETRY`` or ``STEP_FAILED`` (a state that stays infinite
-        or NaN down to the resolution of time; the status is set).
-    """
-    finite = True
-    for i in range(y1.shape[0]):
-        finite = finite and math.isfinite(y1[i])
-    if not (e == e) or not finite:
-        counters[COUNT_REJECTED] += 1
-        h *= 0.25
-        if h <= 4e-16 * max(1.0, abs(t)):  # else the next pass reports underflow
-            counters[COUNT_STATUS] = STATUS_NOT_FINITE
-            return h, STEP_FAILED
-        return h, STEP_RETRY
-    if e > 1.0:
-        counters[COUNT_REJECTED] += 1
-        h *= max(0.2, 0.9 * e ** (-1.0 / order))
-        return h, STEP_RETRY
-    return h, STEP_ACCEPTED
-
-
-@numba.njit(cache=True, inline="always")
 def _step_end(system, kind, t, h, y1, f1, mode, p, g1, gr1, history, counters):
     """Count the accepted step; rates ``f1`` (after a Rosenbrock or Radau step) and guards ``g1``
     with their rates ``gr1`` at its end ``t + h`` [s]."""
@@ -370,27 +337,10 @@ def _advance(system, t, h, t_stop, e, order, y, f, y1, f1, dwork, kind, mode, p,
 
 
 @numba.njit(cache=True, inline="always")
-def _stabilized(h, e, e_last):
-    """The next step [s] after an accepted DOP853 step of error norm ``e`` (the last
-    accepted one's ``e_last``, at least 1e-4) for which :func:`_advance` proposed ``h`` by
-    ``0.9 e^(-1/8)``: times ``e^(0.75 beta) e_last^beta``, the proportional-integral
-    control of Gustafsson (1991, ACM TOMS 17(4) 533-554, doi:10.1145/210232.210242) as
-    Hairer's DOPRI5 applies it (``beta = 0.04``; Hairer, Norsett and Wanner, *Solving
-    Ordinary Differential Equations I*, 2nd ed., 1993, sec. II.4, "stabilized step size
-    control"). Without it the step hunts where a lightly damped contact's eigenvalues
-    reach the method's stability boundary: 23-54 refusals per revolution at rtol 1e-5 and
-    3e-6 on the chapter 4 rig in sustained contact, whose error then did not fall with
-    rtol (docs/integrator.md, *Accuracy in sustained contact*)."""
-    if e <= 0.0:
-        return h
-    return h * e ** (0.75 * STABILIZATION) * e_last ** STABILIZATION
-
-
-@numba.njit(cache=True, inline="always")
 def _proposal(system, method, kind, h_taken, h, h_adams, e, e_accepted, implicit):
     """The step [s] after an accepted step of ``kind`` and size ``h_taken`` [s] for which
     :func:`_advance` proposed ``h``: the multistep history's first step after its DOP853
-    start, the stabilized DOP853 step (:func:`_stabilized`) where the system's DOP853
+    start, the stabilized DOP853 step (:func:`~camdyn.integrator.control.stabilized`) where the system's DOP853
     steps are controlled by their plain estimate, RADAU5's control after a Radau IIA
     step (:func:`camdyn.integrator.implicit.implicit_proposal`), else ``h``."""
     if _multistep(method) and kind == KIND_DOP853:
@@ -398,7 +348,7 @@ def _proposal(system, method, kind, h_taken, h, h_adams, e, e_accepted, implicit
     if kind == KIND_RADAU:
         return implicit_proposal(implicit[0], h_taken, e, h)
     if kind == KIND_DOP853 and systems.plain_error_estimate(system):
-        return _stabilized(h, e, e_accepted)
+        return stabilized(h, e, e_accepted)
     return h
 
 
@@ -451,11 +401,9 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     h_max : float
         Largest step [s].
     method : int
-        0 lets the system choose per mode (``systems.preferred_method``); 1 Dormand-Prince
-        5(4), 2 RODAS4, 3 DOP853, 4 Adams-Moulton of variable order (Nordsieck form), 5
-        Adams and BDF switched automatically (:mod:`camdyn.integrator.multistep`), 6
-        Radau IIA of order 5, 7 DOP853 switched to Radau IIA when its steps are held by
-        stiffness, back at the next event (:mod:`camdyn.integrator.implicit`).
+        ``METHOD_*``: 0 the system's choice per mode, 1 Dormand-Prince 5(4), 2 RODAS4, 3
+        DOP853, 4 Adams, 5 Adams and BDF switched, 6 Radau IIA, 7 DOP853 switched to
+        Radau IIA in stiff stretches (:mod:`~camdyn.integrator.implicit`).
     max_steps, max_events : int
         Limits on accepted steps and on logged events.
     interruptible : bool
@@ -477,18 +425,14 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
     counters : ndarray (COUNT_SIZE,) of int64
     """
     y_out, mode_out, events, counters, y, mode = _allocate(system, y_start, t_out.shape[0], max_events)
-    n = y.shape[0]
-    stage_arrays, states, guards, scan_arrays, implicit = _workspace(n, events.shape[1] - EVENT_GUARDS - n)
+    stage_arrays, states, guards, scan_arrays, implicit = _workspace(y.shape[0], events.shape[1] - EVENT_GUARDS)
     work, stages, k16, f7, err3, h_regime, pts, matrix, pivots, history = stage_arrays
     y1, f, f1, err, ytmp, ymid, yo = states
     g, gr, g1, gr1, gv, grv, g_tmp, gr_tmp = guards
     t = t_start
     i_out, h, monitor_max = _start(system, t, t_end, h_max, y, f, mode, p, g, gr, t_out, y_out, mode_out, counters)
-    n_events, e_accepted = 0, 1e-4
-    last_event_t = -math.inf
-    zeno = 0
-    retried = False
-    lost = 0
+    n_events, e_accepted, last_event_t = 0, 1e-4, -math.inf
+    zeno, retried, lost = 0, False, 0
     while t < t_end:
         h, last, stop = _next_step(t, h, h_max, t_end, max_steps, counters)
         if stop:
@@ -501,10 +445,10 @@ def integrate(system, p, y_start, t_start, t_end, t_out, rtol, atol, h_max, meth
                                      k16, ytmp, y1, f1, err, err3, history, implicit, counters)
         dwork = f7 if kind == KIND_DOP853 else (history if kind == KIND_NORDSIECK else work)
         ready = kind != KIND_DOP853
-        h, verdict = _verdict(t, h, e, order, y1, counters)
-        if verdict == STEP_RETRY:
+        h, outcome = verdict(t, h, e, order, y1, counters)
+        if outcome == STEP_RETRY:
             continue
-        if verdict == STEP_FAILED:
+        if outcome == STEP_FAILED:
             break
         _step_end(system, kind, t, h, y1, f1, mode, p, g1, gr1, history, counters)
         ready = midpoint_guards(system, t, h, y, f, y1, f1, dwork, kind, mode, p, k16, ytmp, f7, ymid, gr, gr1,

@@ -184,12 +184,9 @@ def simulate(system: System, speed=None, revolutions: float = 30.0, duration: fl
     rtol, atol : float
         Local error tolerances: relative [-] and absolute [rad, rad/s].
     method : {"auto", "dop853", "explicit", "rosenbrock", "radau", "switching"}
-        Stepper choice: ``auto`` lets the system choose (the cam-follower uses DOP853,
-        which measured fastest in every regime, see docs/integrator.md); ``dop853``,
-        ``explicit`` (Dormand-Prince 5(4)), ``rosenbrock`` (the L-stable RODAS4) and
-        ``radau`` (the L-stable Radau IIA of order 5, Hairer and Wanner's RADAU5) force
-        one; ``switching`` runs DOP853 and switches to Radau IIA in sustained contact,
-        back at every event (:mod:`camdyn.integrator.implicit`).
+        ``auto`` lets the system choose (the cam-follower: DOP853, docs/integrator.md);
+        ``explicit`` is Dormand-Prince 5(4), ``rosenbrock`` RODAS4, ``radau`` Radau IIA
+        of order 5; ``switching`` runs DOP853 and Radau IIA in sustained contact.
     initial_state : (float, float), optional
         ``(alpha [rad], alpha_dot [rad/s])``; default the static equilibrium at ``Theta0``.
     max_step : float, optional
