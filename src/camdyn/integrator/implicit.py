@@ -48,6 +48,7 @@ import math
 import numba
 import numpy as np
 
+from camdyn.integrator.radau import KEEP_HIGH, KEEP_LOW, predictive_quotient
 from camdyn.integrator.radau_newton import (
     EPS,
     ITERATE,
@@ -58,7 +59,6 @@ from camdyn.integrator.radau_newton import (
     newton_begin,
     newton_continue,
     newton_summary,
-    radau_dense,
     radau_dense_coefficients,
     radau_error,
     radau_factor,
@@ -68,7 +68,7 @@ from camdyn.integrator.radau_tableau import RADAU_C
 from camdyn.systems import registry as systems
 
 __all__ = ["STIFF_BOUND", "STIFF_STEPS", "STATE_SIZE", "spectral_radius", "implicit_workspace", "implicit_reset",
-           "implicit_step", "implicit_proposal", "implicit_dense", "stiffness_test", "is_stiff", "JACOBIAN_THETA"]
+           "implicit_step", "implicit_proposal", "stiffness_test", "is_stiff", "JACOBIAN_THETA"]
 
 #: ``h rho(J)`` [-] (DOP853's step times the Jacobian's spectral radius) above which the
 #: switching method leaves DOP853. The contact mode's eigenvalues are nearly imaginary
@@ -101,9 +101,6 @@ STATE_SIZE = 14
 #: Newton iteration costs three right-hand sides and a Jacobian about five, measured
 #: in docs/integrator.md, *Radau IIA in the driver*).
 JACOBIAN_THETA = 0.1
-#: RADAU5's QUOT1 and QUOT2: a proposed step within these factors of the last one keeps
-#: the last one, and with it the LU factorizations.
-KEEP_LOW, KEEP_HIGH = 1.0, 1.2
 
 
 @numba.njit(cache=True)
@@ -221,7 +218,7 @@ def implicit_step(system, t, y, f0, h, mode, p, rtol, atol, controlled, state, a
     """One attempted Radau IIA step of ``h`` [s] from ``(t, y)`` (``f0 = f(t, y)``) in
     ``mode``: ``y1`` receives the end state, ``err`` the embedded error estimate
     [state units], ``coefficients`` (at least 4 x n) the step's collocation polynomial
-    (:func:`implicit_dense`). ``state`` and ``arrays`` come from
+    (read by :func:`camdyn.integrator.steppers.dense`). ``state`` and ``arrays`` come from
     :func:`implicit_workspace`.
 
     Returns
@@ -294,23 +291,13 @@ def implicit_proposal(state, h, e, h_new):
     [-], for which the driver's control proposed ``h_new`` [s]: RADAU5's [2] predictive
     control (Gustafsson's, [1] IV.8) where a step accepted since the last event gives its
     ``(h_acc, e_acc)``, ``h / max(h / h_new, (h_acc / h) (e^2 / e_acc)^(1/4) / 0.9)``; and
-    ``h`` itself (keeping the LU factorizations) where that is within
+    ``h`` itself (keeping the LU factorizations) where that is within RADAU5's
     ``[KEEP_LOW, KEEP_HIGH]`` times ``h`` and the Newton iteration contracted fast."""
     e = max(e, 1e-10)
     if state[_H_ACCEPTED] == state[_H_ACCEPTED]:   # not NaN
-        gustafsson = (state[_H_ACCEPTED] / h) * (e * e / state[_E_ACCEPTED]) ** 0.25 / 0.9
-        gustafsson = max(1.0 / 8.0, min(5.0, gustafsson))
-        h_new = min(h_new, h / gustafsson)
+        h_new = min(h_new, h / predictive_quotient(h, e, state[_H_ACCEPTED], state[_E_ACCEPTED]))
     state[_H_ACCEPTED] = h
     state[_E_ACCEPTED] = max(1e-2, e)
     if state[_THETA] <= THETA_JACOBIAN and KEEP_LOW <= h_new / h <= KEEP_HIGH:
         return h
     return h_new
-
-
-@numba.njit(cache=True, inline="always")
-def implicit_dense(tau, coefficients, out):
-    """State at ``t + tau h`` inside the last Radau IIA step: its collocation polynomial
-    (cubic, ``O(h^4)`` accurate), whose coefficients :func:`implicit_step` left in
-    ``coefficients``."""
-    radau_dense(tau, coefficients, out)

@@ -71,7 +71,7 @@ from camdyn.integrator.radau_tableau import (
 __all__ = [
     "RADAU_A", "RADAU_B", "RADAU_C", "RADAU_T", "RADAU_TI", "RADAU_GAMMA", "RADAU_ALPHA", "RADAU_BETA",
     "RADAU_E", "RADAU_P", "RADAU_COUNTER_NAMES", "radau_factor", "radau_step", "radau_start",
-    "radau_dense_coefficients", "radau_dense", "radau_solve",
+    "radau_dense_coefficients", "radau_dense", "radau_solve", "predictive_quotient", "KEEP_LOW", "KEEP_HIGH",
     "STEP_CONVERGED", "STEP_SLOW", "STEP_DIVERGED",
 ]
 
@@ -115,10 +115,18 @@ def _controller(h, outcome, factor, error, iterations, first, predictive, h_acce
     fac = min(SAFETY, SAFETY * (1 + 2 * NEWTON_MAX) / (iterations + 2 * NEWTON_MAX))
     quotient = max(1.0 / FACTOR_MAX, min(1.0 / FACTOR_MIN, error ** 0.25 / fac))
     if error < 1.0 and predictive:
-        gustafsson = (h_accepted / h) * (error * error / error_accepted) ** 0.25 / SAFETY
-        gustafsson = max(1.0 / FACTOR_MAX, min(1.0 / FACTOR_MIN, gustafsson))
-        quotient = max(quotient, gustafsson)
+        quotient = max(quotient, predictive_quotient(h, error, h_accepted, error_accepted))
     return error < 1.0, h / quotient
+
+
+@numba.njit(cache=True, inline="always")
+def predictive_quotient(h, error, h_accepted, error_accepted):
+    """Gustafsson's predictive quotient ``h / h_new`` [-] after an accepted step of ``h``
+    [s] with error norm ``error`` [-] that followed an accepted step of ``h_accepted``
+    [s] with ``error_accepted`` [-]: ``(h_acc / h) (err^2 / err_acc)^(1/4) / 0.9`` [3],
+    clipped to ``[1/8, 5]`` as RADAU5 clips its quotients."""
+    gustafsson = (h_accepted / h) * (error * error / error_accepted) ** 0.25 / SAFETY
+    return max(1.0 / FACTOR_MAX, min(1.0 / FACTOR_MIN, gustafsson))
 
 
 @numba.njit(cache=True, inline="always")
