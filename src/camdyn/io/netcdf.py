@@ -41,17 +41,31 @@ class GuardedFile(io.RawIOBase):
     a write failed, for files too large to build in memory (:func:`write_netcdf`).
 
     HDF5 left to fail a write on a full disk ends in a segmentation fault (see
-    :func:`write_netcdf`). Here the first failed write is kept in :attr:`error` and the
-    later writes are dropped (reported as done), so that HDF5 finishes and closes its file
-    normally; the caller then calls :meth:`check`, which raises that error, and discards
-    the file. ``path`` exists already (a temporary of :func:`camdyn.io.atomic.atomic_output`)
-    and is opened without following a link.
+    :func:`write_netcdf`). Here the first failed write is kept in :attr:`error`, and from
+    then on nothing more goes to the disk: the writes are kept in memory instead (reported
+    as done), so that HDF5 finishes and closes its file normally; the caller then calls
+    :meth:`check`, which raises that error, and discards the file.
+
+    HDF5 reads back what it wrote (its heaps of strings, its B-trees, chunks written in
+    part): those reads see the kept writes, never the zeros of a write that did not reach
+    the disk, which HDF5 would take for its own structures (a "bad heap index" error, or
+    a crash). Writes after the failure larger than :attr:`KEPT_WRITE` bytes (blocks of
+    raw data, which HDF5 does not parse) are dropped rather than kept, so that the memory
+    held stays small; the file is discarded anyway. ``path`` exists already (a temporary
+    of :func:`camdyn.io.atomic.atomic_output`) and is opened without following a link.
     """
+
+    PAGE = 4096
+    """Bytes per page of the writes kept in memory."""
+    KEPT_WRITE = 2 ** 20
+    """The largest write [B] kept in memory once the disk is full; larger ones are dropped."""
 
     def __init__(self, path: str | Path):
         super().__init__()
         self._fd = os.open(path, os.O_RDWR | os.O_NOFOLLOW)
         self.error: OSError | None = None
+        self._pages: dict[int, bytearray] = {}   # page number -> content, once the disk is full
+        self._end = 0                              # the file's size as HDF5 sees it [B]
 
     def readable(self) -> bool:
         return True
@@ -69,13 +83,27 @@ class GuardedFile(io.RawIOBase):
         return os.lseek(self._fd, 0, os.SEEK_CUR)
 
     def readinto(self, buffer) -> int:
-        data = os.read(self._fd, len(buffer))
-        buffer[:len(data)] = data
-        return len(data)
+        if self.error is None:
+            data = os.read(self._fd, len(buffer))
+            buffer[:len(data)] = data
+            return len(data)
+        start = self.tell()
+        data = bytearray(os.pread(self._fd, len(buffer), start))
+        size = max(len(data), min(len(buffer), self._end - start))
+        data.extend(bytes(size - len(data)))
+        for page in range(start // self.PAGE, (start + size - 1) // self.PAGE + 1):
+            kept = self._pages.get(page)
+            if kept is not None:
+                lo, hi = max(start, page * self.PAGE), min(start + size, (page + 1) * self.PAGE)
+                data[lo - start:hi - start] = kept[lo - page * self.PAGE:hi - page * self.PAGE]
+        buffer[:size] = data
+        os.lseek(self._fd, start + size, os.SEEK_SET)
+        return size
 
     def write(self, data) -> int:
         view = memoryview(data).cast("B")
         size = len(view)
+        start = self.tell()
         if self.error is None:
             try:
                 while view:
@@ -83,8 +111,26 @@ class GuardedFile(io.RawIOBase):
                 return size
             except OSError as exc:
                 self.error = exc
-        os.lseek(self._fd, len(view), os.SEEK_CUR)   # dropped: the file is discarded anyway
+                self._end = max(self._end, os.fstat(self._fd).st_size)
+        at = start + size - len(view)   # where the bytes not written begin
+        if len(view) <= self.KEPT_WRITE:
+            self._keep(at, view)
+        self._end = max(self._end, at + len(view))
+        os.lseek(self._fd, at + len(view), os.SEEK_SET)
         return size
+
+    def _keep(self, at: int, view: memoryview) -> None:
+        """Keep the bytes ``view``, to be written at ``at``, in memory pages."""
+        end = at + len(view)
+        for page in range(at // self.PAGE, (end - 1) // self.PAGE + 1):
+            base = page * self.PAGE
+            kept = self._pages.get(page)
+            if kept is None:
+                kept = bytearray(os.pread(self._fd, self.PAGE, base))
+                kept.extend(bytes(self.PAGE - len(kept)))
+                self._pages[page] = kept
+            lo, hi = max(at, base), min(end, base + self.PAGE)
+            kept[lo - base:hi - base] = view[lo - at:hi - at]
 
     def truncate(self, size: int | None = None) -> int:
         size = self.tell() if size is None else size
@@ -93,11 +139,14 @@ class GuardedFile(io.RawIOBase):
                 os.ftruncate(self._fd, size)
             except OSError as exc:
                 self.error = exc
+        if self.error is not None:
+            self._end = size
         return size
 
     def close(self) -> None:
         if not self.closed:
             os.close(self._fd)
+            self._pages.clear()
         super().close()
 
     def check(self) -> None:

@@ -192,7 +192,11 @@ class Checkpoint:
             raise ParameterError(f"cannot assemble {spec.output}: {len(missing)} chunks are missing")
         out = Path(spec.output)
         with atomic_output(out) as tmp, GuardedFile(tmp) as sink:
-            self._write_result(sink)
+            try:
+                self._write_result(sink)
+            except Exception:
+                sink.check()   # a full disk is the cause of what HDF5 then said
+                raise
             sink.check()   # a full disk: raised now, with HDF5's file closed normally
         if not keep_parts:
             shutil.rmtree(self.folder, ignore_errors=True)
