@@ -29,8 +29,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import ast
-import hashlib
 import os
 import shutil
 import subprocess
@@ -42,6 +40,8 @@ import xml.etree.ElementTree as ET
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from camdyn.compiled_cache import cache_folder, digests, importers, write_stamp
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -145,52 +145,20 @@ def make_copy(work: Path, mutant: Mutant | None) -> Path:
     return dest
 
 
-def importers(src: Path, target: str) -> set[str]:
-    """The files (relative to ``src``) of ``target`` and of every module under ``src``
-    that imports it, directly or through others."""
-    modules = {f.relative_to(src).with_suffix("").as_posix().replace("/", "."): f.relative_to(src).as_posix()
-               for f in src.rglob("*.py")}
-    modules.update({name.removesuffix(".__init__"): path for name, path in list(modules.items())
-                    if name.endswith(".__init__")})
-    imports: dict[str, set[str]] = {}
-    for path in set(modules.values()):
-        found = set()
-        for node in ast.walk(ast.parse((src / path).read_text())):
-            if isinstance(node, ast.Import):
-                found.update(alias.name for alias in node.names)
-            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-                found.add(node.module)
-                found.update(f"{node.module}.{alias.name}" for alias in node.names)
-        imports[path] = {modules[m] for m in found if m in modules}
-    stale = {target}
-    while True:
-        more = {path for path, used in imports.items() if used & stale} - stale
-        if not more:
-            return stale
-        stale |= more
-
-
-def cache_folder(src: Path, package: str) -> str:
-    """The sub-folder numba's ``NUMBA_CACHE_DIR`` gives the files of ``src/package``
-    (``numba.core.caching``: the folder's name and the SHA-1 of its absolute path)."""
-    folder = os.path.abspath(src / package)
-    return "_".join([os.path.split(folder)[-1], hashlib.sha1(folder.encode()).hexdigest()])
-
-
 def seed_cache(seed: tuple[Path, Path], src: Path, cache: Path, mutant: Mutant) -> int:
     """Copy the unmutated copy's cache (``seed`` = its src and cache) into ``cache`` for
     the copy ``src``, leaving out the entries of the modules that can see the mutant;
     returns the number of entries copied."""
     seed_src, seed_cache_dir = seed
-    stale = importers(src, mutant.path)
+    stale = importers(src, {mutant.path})
     copied = 0
     for package in sorted({Path(f).parent.as_posix() for f in (p.relative_to(src).as_posix()
                                                                for p in src.rglob("*.py"))}):
-        old = seed_cache_dir / cache_folder(seed_src, package)
+        old = cache_folder(seed_src / package, seed_cache_dir)
         if not old.is_dir():
             continue
         fresh = {Path(f).stem for f in stale if Path(f).parent.as_posix() == package}
-        new = cache / cache_folder(src, package)
+        new = cache_folder(src / package, cache)
         new.mkdir(parents=True, exist_ok=True)
         for entry in old.iterdir():
             if entry.name.split(".")[0] not in fresh:
@@ -210,7 +178,7 @@ def seed_from_checkout(src: Path, cache: Path) -> int:
         entries = [e for e in folder.iterdir() if e.suffix in (".nbi", ".nbc")]
         if not entries:
             continue
-        new = cache / cache_folder(src, package)
+        new = cache_folder(src / package, cache)
         new.mkdir(parents=True, exist_ok=True)
         for entry in entries:
             shutil.copy2(entry, new / entry.name)
@@ -230,6 +198,8 @@ def run_variant(mutant: Mutant | None, keep: bool, seed: tuple[Path, Path] | Non
             seed_cache(seed, src, work / "numba-cache", mutant)
         elif mutant is None:
             seed_from_checkout(src, work / "numba-cache")
+        # the entries seeded are those of these sources (camdyn.compiled_cache keeps the rest)
+        write_stamp(cache_folder(src / "camdyn", work / "numba-cache"), digests(src / "camdyn"))
         env = dict(os.environ, PYTHONPATH=str(src), NUMBA_CACHE_DIR=str(work / "numba-cache"),
                    PYTHONDONTWRITEBYTECODE="1")
         report = work / "report.xml"

@@ -9,6 +9,7 @@ Quick start::
     result["alpha_ddot"].plot()
 """
 
+from camdyn import compiled_cache
 from camdyn.errors import (
     CamdynError,
     GeometryError,
@@ -20,6 +21,10 @@ from camdyn.errors import (
 )
 
 __version__ = "0.1.0"
+
+# before anything compiled is loaded: numba's cache entries that a change of the sources
+# made stale are removed (numba itself checks only a function's own file)
+compiled_cache.refresh()
 
 __all__ = [
     "load_system", "list_presets", "simulate", "static_equilibrium", "natural_frequency",

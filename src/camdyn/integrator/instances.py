@@ -37,6 +37,7 @@ import threading
 from pathlib import Path
 from types import ModuleType
 
+from camdyn.compiled_cache import digests
 from camdyn.errors import ParameterError
 
 __all__ = ["MODEL_MODULES", "cache_root", "instance", "instance_key"]
@@ -75,14 +76,23 @@ def _integrator_sources() -> dict[str, str]:
     return sources
 
 
+@functools.lru_cache(maxsize=1)
+def _shared_sources() -> str:
+    """The digests of the compiled packages the generated driver imports from
+    (integrator, systems, model: its shared steppers, linear algebra and physics)."""
+    shared = ("camdyn/integrator/", "camdyn/systems/", "camdyn/model/")
+    return "".join(f"{name}:{sha}\n" for name, sha in digests(_HERE.parent).items() if name.startswith(shared))
+
+
 def instance_key(adapter: str, dependencies: tuple[str, ...] = ()) -> str:
     """The hash that names one model's driver package: of the integrator's model-calling
-    modules, the adapter's source and the sources of ``dependencies`` (the model's own
-    modules, as file paths)."""
+    modules, the compiled modules it imports from (:func:`_shared_sources`), the adapter's
+    source and the sources of ``dependencies`` (the model's own modules, as file paths)."""
     digest = hashlib.sha256()
     for name, text in sorted(_integrator_sources().items()):
         digest.update(name.encode())
         digest.update(text.encode())
+    digest.update(_shared_sources().encode())
     digest.update(adapter.encode())
     for path in dependencies:
         digest.update(Path(path).read_bytes())
