@@ -17,7 +17,7 @@ The package's name is a hash of the integrator's source, the adapter and the mod
 own module sources, so a change to any of them compiles a new driver instead of loading
 a stale one (numba's cache does not follow changes in called functions' modules).
 
-Measured (docs/design-notes.md): numba caches neither a closure over the model's
+Measured (docs/design-notes/compiled-driver.md): numba caches neither a closure over the model's
 functions nor a driver that takes them as arguments across processes (the dispatcher
 types are keyed by object identity), which is why the driver is instantiated from
 source.
