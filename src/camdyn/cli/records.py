@@ -97,15 +97,29 @@ def identify_friction(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"
                                          help="Record: .csv, .nc/.h5 or .uff (Nx, Ny, alpha_ddot or a_t)."),
                       set_: Optional[List[str]] = SetOption,
                       speed: Optional[str] = typer.Option(None, help="Cam speed; default from the file or estimated."),
-                      harmonics: int = typer.Option(20, help="Cam harmonics per signal in the force balance "
-                                                             "(1 = the thesis's truncation)."),
+                      harmonics: Optional[int] = typer.Option(
+                          None, help="Cam harmonics per signal: in the force balance (default 20; 1 = the "
+                                     "thesis's truncation), or compared by the orbit fit (default 4)."),
+                      method: str = typer.Option("force-balance", help="force-balance (thesis 4.6) or orbit: "
+                                                 "fit the harmonic-balance orbit's harmonics to the record's."),
+                      fit: Optional[List[str]] = typer.Option(None, "--fit", help="With --method orbit: a "
+                                                               "parameter fitted (repeat for more; default "
+                                                               "friction.coefficient)."),
                       json_out: bool = JsonOption):
     """Coefficient of friction from pivot forces and acceleration (thesis 4.6)."""
     from camdyn.identification.friction import estimate_friction
     from camdyn.io.measurements import read_measurement
 
+    if method not in ("force-balance", "orbit"):
+        raise ParameterError(f"--method must be force-balance or orbit, got {method!r:.40}")
+    if fit and method != "orbit":
+        raise ParameterError("--fit goes with --method orbit")
     system = load_source(source, set_)
     rec = read_measurement(data)
+    if method == "orbit":
+        _identify_by_orbit(system, rec, speed, harmonics or 4, tuple(fit or ("friction.coefficient",)), json_out)
+        return
+    harmonics = 20 if harmonics is None else harmonics
     est = estimate_friction(system, rec, speed=parse_speed(speed) if speed else None, harmonics=harmonics)
     if json_out:
         full = est.to_dict()
@@ -123,6 +137,27 @@ def identify_friction(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"
     for name, c in est.checks.items():
         mark = "ok" if c["passed"] else ("FAILED" if c.get("enforced", True) else "note")
         console.print(f"  [{mark}] {name}: {c['detail']}")
+
+
+def _identify_by_orbit(system, rec, speed, harmonics: int, keys: tuple, json_out: bool) -> None:
+    """``identify friction --method orbit``: :func:`camdyn.steady.record_fit.fit_record`."""
+    from camdyn.steady.record_fit import fit_record
+
+    result = fit_record(system, rec, keys=keys, speed=parse_speed(speed) if speed else None, harmonics=harmonics)
+    if json_out:
+        full = result.to_dict()
+        summary = {"values": full.pop("values"), "standard_errors": full.pop("standard_errors"),
+                   **{k: full.pop(k) for k in ("speed_hz", "harmonics", "residual", "evaluations")}}
+        emit_json("identify-orbit-fit", summary, **full)
+        return
+    table = Table("quantity", "value")
+    for key, value in result.values.items():
+        table.add_row(key, f"{value:.6g} ± {result.standard_errors[key]:.2g} {result.units[key]}".rstrip())
+    table.add_row("cam speed", f"{result.speed_hz:.6g} Hz")
+    table.add_row("channels, harmonics compared", f"{', '.join(result.channels)}; mean and 1..{result.harmonics}")
+    table.add_row("rms residual over each channel's rms", f"{result.residual:.3g}")
+    table.add_row("orbits balanced", str(result.evaluations))
+    console.print(table)
 
 
 def identify_modal(data: Path = typer.Argument(..., help="Impulse test: force [N] and acceleration [m/s^2]."),
