@@ -96,7 +96,8 @@ def _add_title(app, docname, source):
 #: the layers from the parameters up.
 API_PACKAGES = [
     "camdyn.params", "camdyn.model", "camdyn.simulation", "camdyn.analysis", "camdyn.identification",
-    "camdyn.tribology", "camdyn.continuation", "camdyn.records", "camdyn.io", "camdyn.sweeps", "camdyn.plotting",
+    "camdyn.tribology", "camdyn.continuation", "camdyn.steady", "camdyn.records", "camdyn.io", "camdyn.sweeps",
+    "camdyn.plotting",
     "camdyn.errors",
 ]
 API_DIR = DOCS / "api"

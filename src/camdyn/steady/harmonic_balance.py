@@ -240,7 +240,7 @@ def _newton(model: GridModel, coefficients: np.ndarray, harmonics: int, toleranc
 
 def hill_multipliers(jacobian: np.ndarray, unknowns: int, period: float) -> tuple[np.ndarray, np.ndarray]:
     """Floquet exponents [1/s] and multipliers [-] by Hill's method: eigenvalues of the
-    Hill matrix ``-dR/dX``, the ``unknowns`` with the smallest |imaginary part| kept,
+    Hill matrix ``-dR/dX``, the ``unknowns`` with the smallest absolute imaginary part kept,
     ``mu = exp(lambda T)``; multipliers largest magnitude first."""
     values = np.linalg.eigvals(-jacobian)
     kept = values[np.argsort(np.abs(values.imag), kind="stable")[:unknowns]]
