@@ -1,6 +1,8 @@
 """Wall time per orbit of harmonic balance against shooting (find_orbit) on the chapter 4
 rig ("sundar2014-friction", 11.55 Hz), interleaved in one process, and each one's error in
 the orbit's start state against a reference (harmonic balance at H = 32, tail ~1e-14).
+"hb cold" is given no guess: it starts from the problem's orbit guess (the follower riding
+the cam, pressed in by the static penetration).
 
 Run: .venv/bin/python benchmarks/bench_harmonic_balance.py [repeats]
 """
@@ -20,7 +22,7 @@ def main(repeats: int = 5) -> None:
     problem = system_problem(camdyn.load_system("sundar2014-friction"), "motion.speed")
     start = orbits.find_orbit(problem).state                         # warm-up and a start for both
     reference = harmonic_balance(problem, harmonics=32, guess=start).samples[0]
-    times = {"hb H=8": [], "hb auto": [], "shooting": []}
+    times = {"hb H=8": [], "hb auto": [], "hb cold": [], "shooting": []}
     errors = {}
     for _ in range(repeats):                                          # interleaved
         t = time.perf_counter()
@@ -31,6 +33,10 @@ def main(repeats: int = 5) -> None:
         auto = harmonic_balance(problem, guess=start)
         times["hb auto"].append(time.perf_counter() - t)
         errors["hb auto"] = np.max(np.abs(auto.samples[0] / reference - 1))
+        t = time.perf_counter()
+        cold = harmonic_balance(problem)                              # no guess: the problem's orbit guess
+        times["hb cold"].append(time.perf_counter() - t)
+        errors["hb cold"] = np.max(np.abs(cold.samples[0] / reference - 1))
         t = time.perf_counter()
         shot = orbits.find_orbit(problem, start=start)
         times["shooting"].append(time.perf_counter() - t)

@@ -19,6 +19,7 @@ import numpy as np
 
 from camdyn.errors import ParameterError
 from camdyn.integrator import driver as bundled_driver
+from camdyn.model.geometry import cam_angle, contact_point, pressed_angles
 from camdyn.params.schema import parameter_index
 from camdyn.params.system import System
 from camdyn.simulation import limits
@@ -83,6 +84,11 @@ class Problem:
     step_fraction : float or None
         Largest step and scan interval as fractions of the period [-]; None: those of
         :func:`~camdyn.simulation.limits.step_limits`.
+    orbit_guess : callable or None
+        ``orbit_guess(value, times) -> ndarray (N, unknowns)``: a guess of the periodic
+        orbit at ``times`` [s] (one forcing period on a uniform grid, end excluded), from
+        which harmonic balance starts when given no guess (the cam-follower's: the
+        follower riding the cam rigidly); None: the constant ``template``.
     """
 
     system_id: int
@@ -105,6 +111,7 @@ class Problem:
     clock: int | None = None
     driver: ModuleType | None = field(default=None, compare=False)
     step_fraction: float | None = None
+    orbit_guess: Callable[[float, np.ndarray], np.ndarray] | None = field(default=None, compare=False)
 
     def engine(self) -> ModuleType:
         """The driver module that integrates this problem's model."""
@@ -244,9 +251,21 @@ def system_problem(system: System, key: str = "motion.speed", initial_state=None
         template[0], template[1] = float(initial_state[0]), float(initial_state[1])
         if not np.all(np.isfinite(template)):
             raise ParameterError("initial_state must be finite")
+    def orbit_guess(value: float, times: np.ndarray) -> np.ndarray:
+        # the follower riding the cam pressed in by the template's (static) penetration,
+        # where Hertz's law has a stiffness (at rigid contact, delta = 0, it has none and
+        # Newton starts off far); alpha_dot by spectral differentiation over the period
+        p, period = build(value)
+        pressed = max(contact_point(float(template[0]), cam_angle(float(times[0]), p)[0], p)[0], 0.0)
+        alpha = pressed_angles(np.ascontiguousarray(times, dtype=float), p, float(template[0]), pressed)
+        spectrum = np.fft.rfft(alpha) * (2j * math.pi / period) * np.arange(alpha.size // 2 + 1)
+        if alpha.size % 2 == 0:
+            spectrum[-1] = 0.0                                       # the Nyquist bin has no derivative
+        return np.column_stack([alpha, np.fft.irfft(spectrum, n=alpha.size)])
+
     return Problem(systems.CAM_FOLLOWER, build, value, template, int(systems.controlled_size(systems.CAM_FOLLOWER)),
                    name=key, unit=str(unit), rtol=rtol, atol=atol, system=system, impact_sign=1.0, key=key,
-                   matrix_rtol=100.0 * rtol, matrix_atol=100.0 * atol)
+                   matrix_rtol=100.0 * rtol, matrix_atol=100.0 * atol, orbit_guess=orbit_guess)
 
 
 def bound_problem(bound, key: str | None = None, t_start: float = 0.0, rtol: float = 1e-10,

@@ -31,8 +31,8 @@ from camdyn.model.rocking_profile import (
 )
 
 __all__ = ["cam_angle", "cam_acceleration", "contact_kinematics", "contact_point", "zero_state", "contact_point_rate",
-           "contact_rates_trig", "penetrations", "rigid_angles", "contact_point_from", "contact_kinematics_from",
-           "contact_rates_from"]
+           "contact_rates_trig", "penetrations", "rigid_angles", "pressed_angles", "contact_point_from",
+           "contact_kinematics_from", "contact_rates_from"]
 
 
 @numba.njit(cache=True)
@@ -296,6 +296,26 @@ def rigid_angles(thetas, p, alpha_start):
         for _ in range(60):
             delta, chi, rho_c, xc, yc = contact_point(a, thetas[i], p)
             step = delta / chi
+            a += step
+            if abs(step) < 1e-15:
+                break
+        out[i] = a
+    return out
+
+
+@numba.njit(cache=True)
+def pressed_angles(times, p, alpha_start, pressed):
+    """Follower angles [rad] at ``times`` [s] with the follower pressed ``pressed`` [m]
+    into the cam (``delta = pressed``; 0: rigid contact), the cam at its prescribed angle
+    (:func:`cam_angle`), by Newton's method from ``alpha_start`` [rad] as
+    :func:`rigid_angles`."""
+    out = np.empty_like(times)
+    a = alpha_start
+    for i in range(times.size):
+        theta = cam_angle(times[i], p)[0]
+        for _ in range(60):
+            delta, chi, rho_c, xc, yc = contact_point(a, theta, p)
+            step = (delta - pressed) / chi
             a += step
             if abs(step) < 1e-15:
                 break

@@ -94,6 +94,10 @@ class HarmonicOrbit:
         return np.hypot(c[:, 1::2], c[:, 2::2])
 
 
+#: The harmonics of a problem's orbit guess that ``"auto"`` looks at to choose its first H.
+PROBE_HARMONICS = 8
+
+
 def grid_size(harmonics: int) -> int:
     """N: the power of two ``>= 8 H + 2`` (anti-aliasing rule ``N >= (q + 1) H + 1``, q = 7)."""
     return 1 << int(math.ceil(math.log2(8 * harmonics + 2)))
@@ -114,13 +118,16 @@ def _transforms(harmonics: int, count: int):
     return synth, project
 
 
+@functools.lru_cache(maxsize=16)
 def _bases(harmonics: int, count: int, omega: float):
-    """Synthesis E (N, 2H+1), projection P (2H+1, N) and derivative nabla (2H+1, 2H+1)."""
+    """Synthesis E (N, 2H+1), projection P (2H+1, N) and derivative nabla (2H+1, 2H+1),
+    read-only (kept between calls: a Newton solve asks for the same ones each iteration)."""
     synth, project = _transforms(harmonics, count)
     k = np.arange(1, harmonics + 1)
     nabla = np.zeros((2 * harmonics + 1, 2 * harmonics + 1))
     nabla[2 * k - 1, 2 * k] = k * omega                           # a'_k = k w b_k
     nabla[2 * k, 2 * k - 1] = -k * omega                          # b'_k = -k w a_k
+    nabla.flags.writeable = False
     return synth, project, nabla
 
 
@@ -173,7 +180,8 @@ class GridModel:
         sys = self.systems
         if not self.problem.impacts:
             return []
-        states = np.array([self.problem.full_state(s, self.value) for s in samples])
+        states = np.tile(self.problem.full_state(samples[0], self.value), (times.size, 1))
+        states[:, :self.u] = samples
         out, changed = np.empty(times.size), []
         for k in range(int(sys.guard_count(self.system))):
             sign = float(sys.expected_sign(self.system, k, mode, self.p))
@@ -272,7 +280,27 @@ def _guess(model: GridModel, harmonics: int, guess) -> np.ndarray:
         if g.ndim == 2:
             return resize(g, harmonics)
         return resize(g.reshape(model.u, 1), harmonics)         # a constant state
-    return resize(model.problem.template[:model.u].reshape(model.u, 1).astype(float), harmonics)
+    problem = model.problem
+    if problem.orbit_guess is not None:                          # the problem's own orbit guess, projected
+        count = grid_size(harmonics)
+        times = problem.t_start + model.period * np.arange(count) / count
+        samples = np.asarray(problem.orbit_guess(model.value, times), float)
+        return (_transforms(harmonics, count)[1] @ samples).T
+    return resize(problem.template[:model.u].reshape(model.u, 1).astype(float), harmonics)
+
+
+def _first_harmonics(model: GridModel, guess, tail_tolerance: float) -> tuple[int, np.ndarray]:
+    """``"auto"``'s first H and guess: H = 2 from a given or constant guess; from the
+    problem's orbit guess, the smallest of 2, 4, 8 whose tail (:func:`tail_measure`)
+    the guess already meets (the guess's spectrum says how many harmonics the orbit needs,
+    which spares Newton the solves at the smaller H)."""
+    if guess is not None or model.problem.orbit_guess is None:
+        return 2, _guess(model, 2, guess)
+    x = _guess(model, PROBE_HARMONICS, None)
+    h = 2
+    while h < PROBE_HARMONICS and tail_measure(resize(x, h), h) > tail_tolerance:
+        h *= 2
+    return h, resize(x, h)
 
 
 def harmonic_balance(problem: Problem, harmonics: int | str = "auto", guess=None, value: float | None = None,
@@ -304,8 +332,11 @@ def harmonic_balance(problem: Problem, harmonics: int | str = "auto", guess=None
     auto = harmonics == "auto"
     if not auto and (not isinstance(harmonics, int) or harmonics < 0):
         raise ParameterError(f"harmonics must be a non-negative integer or 'auto', got {harmonics!r}")
-    h = 2 if auto else int(harmonics)
-    x = _guess(model, h, guess)
+    if auto:
+        h, x = _first_harmonics(model, guess, tail_tolerance)
+    else:
+        h = int(harmonics)
+        x = _guess(model, h, guess)
     while True:
         x, times, samples, norm, iterations, jac, mode = _newton(model, x, h, tolerance, max_iterations)
         tail = tail_measure(x, h)
