@@ -31,7 +31,6 @@ import functools
 import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
 from camdyn.continuation.problem import Problem
@@ -39,7 +38,7 @@ from camdyn.errors import ParameterError, SimulationError
 from camdyn.simulation import limits
 
 __all__ = ["HarmonicOrbit", "GridModel", "harmonic_balance", "harmonic_residual", "hill_multipliers", "grid_size",
-           "grid_values", "tail_measure", "resize"]
+           "tail_measure", "resize"]
 
 
 @dataclass(frozen=True)
@@ -131,18 +130,6 @@ def _bases(harmonics: int, count: int, omega: float):
     return synth, project, nabla
 
 
-@numba.njit(cache=False)   # its first two arguments are dispatchers: compiled per process (about 4 s)
-def grid_values(rhs, jacobian, system, times, states, mode, p, rates, jacs):
-    """The model's rates ``rates[j] = f(t_j, y_j)`` and Jacobians ``jacs[j] = df/dy`` at
-    every grid time ``times[j]`` [s] and full state ``states[j]`` in mode ``mode``, by the
-    driver's compiled registry functions ``rhs`` and ``jacobian``, in one call."""
-    f = np.empty(states.shape[1])
-    for j in range(times.shape[0]):
-        rhs(system, times[j], states[j], mode, p, f)
-        jacobian(system, times[j], states[j], f, mode, p, jacs[j])
-        rates[j] = f
-
-
 class GridModel:
     """The problem's rhs and Jacobian at every grid time, through its driver's compiled
     registry (``problem.engine().systems``), at the scalar parameter ``value`` [its unit].
@@ -169,7 +156,7 @@ class GridModel:
         sys.initial_mode(self.system, float(times[0]), states[0], self.p, mode)
         rates = np.empty_like(states)
         jacs = np.empty((times.size, self.n, self.n))
-        grid_values(sys.rhs, sys.jacobian, self.system, times, states, mode, self.p, rates, jacs)
+        sys.grid_values(self.system, times, states, mode, self.p, rates, jacs)
         rates, jacs = rates[:, :u], jacs[:, :u, :u]
         return rates, jacs, mode
 

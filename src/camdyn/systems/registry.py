@@ -38,7 +38,7 @@ __all__ = ["CAM_FOLLOWER", "OSCILLATOR", "RIGID_IMPACT", "COUPLED_OSCILLATORS", 
            "TWO_FOLLOWERS_ANGLE",
            "VARIATIONAL", "PARAMETRIC", "state_size", "controlled_size",
            "guard_count", "mode_size", "rhs", "rhs_inline", "jacobian", "guards",
-           "guard_samples", "expected_sign", "transition", "initial_mode", "regime", "preferred_method",
+           "guard_samples", "grid_values", "expected_sign", "transition", "initial_mode", "regime", "preferred_method",
            "plain_error_estimate", "monitor"]
 
 
@@ -133,6 +133,18 @@ def guard_samples(system, p, times, states, index, out):
     for i in range(times.shape[0]):
         guards(system, times[i], states[i], states[i], False, p, values, rates)
         out[i] = values[index]
+
+
+@numba.njit(cache=True)
+def grid_values(system, times, states, mode, p, rates, jacs):
+    """The rates ``rates[j] = f(t_j, y_j)`` and Jacobians ``jacs[j] = df/dy`` of ``system``
+    at every time ``times[j]`` [s] and full state ``states[j]`` in mode ``mode``, in one
+    compiled call (harmonic balance's grid, :mod:`camdyn.steady.harmonic_balance`)."""
+    f = np.empty(states.shape[1])
+    for j in range(times.shape[0]):
+        rhs(system, times[j], states[j], mode, p, f)
+        jacobian(system, times[j], states[j], f, mode, p, jacs[j])
+        rates[j] = f
 
 
 @numba.njit(cache=True)
