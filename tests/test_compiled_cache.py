@@ -29,9 +29,7 @@ print(value())
 """
 
 
-def _write_package(src: Path, constant: str) -> None:
-    (src / "pkg").mkdir(exist_ok=True)
-    (src / "pkg" / "__init__.py").write_text("")
+def _write_callee(src: Path, constant: str) -> None:
     (src / "pkg" / "callee.py").write_text(textwrap.dedent(f"""
         import numba
 
@@ -39,6 +37,12 @@ def _write_package(src: Path, constant: str) -> None:
         def constant():
             return {constant}
     """))
+
+
+def _write_package(src: Path, constant: str) -> None:
+    (src / "pkg").mkdir(exist_ok=True)
+    (src / "pkg" / "__init__.py").write_text("")
+    _write_callee(src, constant)
     (src / "pkg" / "caller.py").write_text(textwrap.dedent("""
         import numba
         from pkg.callee import constant
@@ -61,7 +65,7 @@ def _value(src: Path, guarded: bool) -> str:
 def test_a_change_in_a_called_module_reaches_the_cached_caller_only_with_refresh(tmp_path, guarded):
     _write_package(tmp_path, "1.0")
     assert _value(tmp_path, guarded) == "2.0"
-    _write_package(tmp_path, "41.0")          # only the callee's file changes
+    _write_callee(tmp_path, "41.0")           # only the callee's file changes
     seen = _value(tmp_path, guarded)
     if guarded:
         assert seen == "42.0"

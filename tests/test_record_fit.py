@@ -115,6 +115,7 @@ def test_bad_settings_are_refused_before_any_work(record, change, error, match):
     if error is None:   # a start outside the bounds is moved inside: the fit ends on the bound
         fit = fit_record(_start(), record, **change)
         assert fit.values["friction.coefficient"] == pytest.approx(0.5)
+        assert math.isnan(fit.standard_errors["friction.coefficient"])   # on its bound: none
         return
     with pytest.raises(error, match=match):
         fit_record(_start(), record, **change)
@@ -141,3 +142,11 @@ def test_command_line_fits_the_record_file(record, tmp_path, capsys):
     assert main(["identify", "friction", "sundar2014-friction", str(path), "--fit", "friction.coefficient"]) == 2
     assert "--fit goes with --method orbit" in capsys.readouterr().err
     assert main(["identify", "friction", "sundar2014-friction", str(path), "--method", "guess"]) == 2
+
+
+def test_more_harmonics_compared_than_the_orbit_needs(record):
+    # K = 20 > the orbit's own H (8): the orbit is balanced at H = K so that its grid
+    # resolves every harmonic compared
+    fit = fit_record(_start(**{"friction.coefficient": 0.1}), record, harmonics=20)
+    assert fit.orbit.harmonics >= 20 and len(fit.predicted["Nx"]) == 21
+    assert fit.values["friction.coefficient"] == pytest.approx(MU, rel=1e-6)

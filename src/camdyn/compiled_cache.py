@@ -14,7 +14,9 @@ digest of every source file of the package beside the cache; where files changed
 it removes the cache entries of those modules and of every module that imports them,
 directly or not (:func:`importers`), so that numba compiles exactly the code that can
 see the change. Where the package's folders are not writable (an installed package),
-numba keeps its cache elsewhere and nothing here applies.
+the same is done in numba's per-user cache folder, where numba then keeps its entries
+(numba stamps a file by its content, so a reinstall that changes only a called module
+leaves the caller's entry there too).
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ __all__ = ["STAMP", "cache_folder", "digests", "importers", "refresh", "remove_e
 #: The file, in the package's own cache folder, that holds the digests of the sources
 #: the cache was compiled from.
 STAMP = "camdyn-sources.json"
-_PACKAGE = Path(__file__).resolve().parent
+_PACKAGE = Path(os.path.abspath(__file__)).parent   # as numba names it: symbolic links kept
 
 
 def digests(package: Path) -> dict[str, str]:
@@ -43,18 +45,23 @@ def digests(package: Path) -> dict[str, str]:
             for f in sorted(package.rglob("*.py"))}
 
 
-def importers(src: Path, targets) -> set[str]:
+def importers(src: Path, targets, package: Path | None = None) -> set[str]:
     """The files (relative to ``src``) of ``targets`` and of every module under ``src``
-    that imports one of them, directly or through others (a target may be a file that
-    no longer exists: its importers are found by its module's name)."""
-    files = {f.relative_to(src).as_posix() for f in src.rglob("*.py")}
+    (under ``package`` only, if given: an installed package's ``src`` is all of
+    site-packages) that imports one of them, directly or through others (a target may be
+    a file that no longer exists: its importers are found by its module's name)."""
+    files = {f.relative_to(src).as_posix() for f in (package or src).rglob("*.py")}
     modules = {Path(path).with_suffix("").as_posix().replace("/", "."): path for path in files | set(targets)}
     modules.update({name.removesuffix(".__init__"): path for name, path in list(modules.items())
                     if name.endswith(".__init__")})
     imports: dict[str, set[str]] = {}
     for path in files:
         found = set()
-        for node in ast.walk(ast.parse((src / path).read_text(encoding="utf-8"))):
+        try:
+            tree = ast.parse((src / path).read_text(encoding="utf-8"))
+        except (OSError, SyntaxError, ValueError):   # its own import will say what is wrong
+            tree = ast.Module(body=[], type_ignores=[])
+        for node in ast.walk(tree):
             if isinstance(node, ast.Import):
                 found.update(alias.name for alias in node.names)
             elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
@@ -72,13 +79,30 @@ def importers(src: Path, targets) -> set[str]:
 def cache_folder(folder: Path, base: str | os.PathLike | None = None) -> Path | None:
     """The folder where numba caches the compiled functions of the sources in ``folder``:
     under ``base`` (default ``$NUMBA_CACHE_DIR``; the folder's name and the SHA-1 of its
-    absolute path, as ``numba.core.caching`` names it), else ``folder/__pycache__`` where
-    ``folder`` is writable; None where numba would use a folder of its own choosing."""
+    absolute path, as ``numba.core.caching`` names it) where that can be written, else
+    ``folder/__pycache__`` where ``folder`` is writable, else numba's per-user cache
+    folder (named as under ``base``), in numba's own order."""
     base = base or os.environ.get("NUMBA_CACHE_DIR")
     folder = Path(os.path.abspath(folder))
-    if base:
-        return Path(base) / "_".join([folder.name, hashlib.sha1(str(folder).encode()).hexdigest()])
-    return folder / "__pycache__" if os.access(folder, os.W_OK) else None
+    named = "_".join([folder.name, hashlib.sha1(str(folder).encode()).hexdigest()])
+    if base and _writable(Path(base) / named):
+        return Path(base) / named
+    if os.access(folder, os.W_OK):
+        return folder / "__pycache__"
+    # an installed package that cannot be written: numba's per-user cache folder
+    from numba.misc.appdirs import AppDirs
+
+    return Path(AppDirs(appname="numba", appauthor=False).user_cache_dir) / named
+
+
+def _writable(folder: Path) -> bool:
+    """Whether ``folder`` exists or can be made, and can be written (numba's own test
+    before it uses a cache folder)."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return False
+    return os.access(folder, os.W_OK)
 
 
 def remove_entries(src: Path, files) -> int:
@@ -120,7 +144,10 @@ def refresh(package: Path = _PACKAGE) -> int:
         return 0
     changed = {f for f in set(now) | set(before) if now.get(f) != before.get(f)}
     src = package.parent
-    removed = remove_entries(src, importers(src, changed))
+    try:
+        removed = remove_entries(src, importers(src, changed, package))
+    except OSError:   # entries that cannot be removed: left, and the record not updated
+        return 0
     write_stamp(folder, now)
     return removed
 

@@ -117,7 +117,8 @@ def identify_friction(source: str = typer.Argument(..., metavar="PRESET_OR_TOML"
     system = load_source(source, set_)
     rec = read_measurement(data)
     if method == "orbit":
-        _identify_by_orbit(system, rec, speed, harmonics or 4, tuple(fit or ("friction.coefficient",)), json_out)
+        _identify_by_orbit(system, rec, speed, 4 if harmonics is None else harmonics,
+                           tuple(fit or ("friction.coefficient",)), json_out)
         return
     harmonics = 20 if harmonics is None else harmonics
     est = estimate_friction(system, rec, speed=parse_speed(speed) if speed else None, harmonics=harmonics)

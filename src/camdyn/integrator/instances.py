@@ -79,8 +79,9 @@ def _integrator_sources() -> dict[str, str]:
 @functools.lru_cache(maxsize=1)
 def _shared_sources() -> str:
     """The digests of the compiled packages the generated driver imports from
-    (integrator, systems, model: its shared steppers, linear algebra and physics)."""
-    shared = ("camdyn/integrator/", "camdyn/systems/", "camdyn/model/")
+    (integrator, systems, model: its shared steppers, linear algebra and physics; params:
+    the law constants the model's code freezes in)."""
+    shared = ("camdyn/integrator/", "camdyn/systems/", "camdyn/model/", "camdyn/params/")
     return "".join(f"{name}:{sha}\n" for name, sha in digests(_HERE.parent).items() if name.startswith(shared))
 
 

@@ -93,7 +93,7 @@ class HarmonicOrbit:
         return np.hypot(c[:, 1::2], c[:, 2::2])
 
 
-#: The harmonics of a problem's orbit guess that ``"auto"`` looks at to choose its first H.
+#: The harmonics of a problem's orbit guess that ``"auto"`` looks at to choose its first H [-].
 PROBE_HARMONICS = 8
 
 

@@ -132,6 +132,8 @@ class _Forward:
         problem = system_problem(self.system.with_values(**values), "motion.speed")
         try:
             orbit = harmonic_balance(problem, self.orbit_harmonics, guess=self.guess)
+            if orbit.harmonics < self.harmonics:                    # the grid must resolve K harmonics
+                orbit = harmonic_balance(problem, self.harmonics, guess=orbit.coefficients)
         except SimulationError as exc:
             trial = ", ".join(f"{k} = {v:.6g}" for k, v in zip(self.keys, x))
             raise IdentificationError(f"no orbit in sustained contact at {trial}: {exc}") from None
@@ -189,8 +191,9 @@ def fit_record(system: System | str, record: xr.Dataset, keys=("friction.coeffic
     revolutions : int, optional
         The last whole cam revolutions of the record used [-]; default all of them.
     bounds : (lower, upper), optional
-        Bounds of the parameters (sequences in the keys' order); default ``[0, inf)``
-        for every key.
+        Bounds of the parameters (sequences in the keys' order, in the keys' units);
+        default ``[0, inf)`` for a key that starts at or above 0, unbounded otherwise. A
+        parameter that ends on a bound has no standard error (NaN).
 
     Raises
     ------
@@ -231,20 +234,21 @@ def fit_record(system: System | str, record: xr.Dataset, keys=("friction.coeffic
         predicted = forward(x)
         return np.concatenate([(predicted[c] - measured[c]) / scale[c] for c in channels])
 
-    lower, upper = (np.zeros(len(keys)), np.full(len(keys), np.inf)) if bounds is None else (
+    lower, upper = (np.where(x0 >= 0.0, 0.0, -np.inf), np.full(len(keys), np.inf)) if bounds is None else (
         np.asarray(bounds[0], float), np.asarray(bounds[1], float))
     if lower.shape != x0.shape or upper.shape != x0.shape or np.any(lower >= upper):
         raise ParameterError(f"bounds must be two sequences of {len(keys)} values, lower below upper")
     x0 = np.clip(x0, lower, upper)
     solution = least_squares(residuals, x0, bounds=(lower, upper), x_scale="jac", diff_step=1e-7)
-    predicted = forward(solution.x)
-    r = residuals(solution.x)
+    predicted = forward(solution.x)                                  # and the fitted orbit
+    r = solution.fun
     dof = max(r.size - len(keys), 1)
     try:
         covariance = np.linalg.inv(solution.jac.T @ solution.jac) * float(r @ r) / dof
         errors = np.sqrt(np.abs(np.diag(covariance)))
     except np.linalg.LinAlgError:
         errors = np.full(len(keys), np.inf)
+    errors = np.where(solution.active_mask != 0, np.nan, errors)     # on a bound: no standard error
     return RecordFit(values=dict(zip(keys, map(float, solution.x))),
                      standard_errors=dict(zip(keys, map(float, errors))), speed_hz=speed, channels=channels,
                      harmonics=harmonics, measured=measured, predicted=predicted,

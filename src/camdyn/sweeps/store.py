@@ -233,6 +233,8 @@ class Checkpoint:
                 reg.attrs["flag_values"] = np.array(sorted(M.REGIMES), dtype=np.int8)
                 reg.attrs["flag_meanings"] = " ".join(M.REGIMES[k] for k in sorted(M.REGIMES))
             for start, block in self._blocks():
+                if sink.error is not None:   # the disk is full: the file is discarded, HDF5 need only close it
+                    break
                 for name, var in variables.items():
                     _write_rows(var, block[name], start, spec.shape)
             f.attrs.update(_global_attributes(spec))
