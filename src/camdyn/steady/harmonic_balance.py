@@ -36,6 +36,7 @@ import numpy as np
 from camdyn.continuation.problem import Problem
 from camdyn.errors import ParameterError, SimulationError
 from camdyn.simulation import limits
+from camdyn.systems.traits import contact_mode_slot
 
 __all__ = ["HarmonicOrbit", "GridModel", "harmonic_balance", "harmonic_residual", "hill_multipliers", "grid_size",
            "tail_measure", "resize"]
@@ -147,13 +148,36 @@ class GridModel:
         self.n = problem.template.size
         self.u = problem.unknowns
 
+    def full_states(self, samples: np.ndarray) -> np.ndarray:
+        """The full states (N, n) of the unknowns ``samples`` (N, u): the problem's template
+        with its first ``u`` components replaced."""
+        states = np.tile(self.problem.full_state(samples[0], self.value), (samples.shape[0], 1))
+        states[:, :self.u] = samples
+        return states
+
+    def mode(self, time: float, state: np.ndarray) -> np.ndarray:
+        """The hybrid mode the model starts in at ``time`` [s] and full state ``state``."""
+        sys = self.systems
+        mode = np.zeros(int(sys.mode_size(self.system)))
+        sys.initial_mode(self.system, float(time), state, self.p, mode)
+        return mode
+
+    def balanced_modes(self, times: np.ndarray, samples: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The full states (N, n) and the mode at every sample (N, mode size) of an orbit
+        balanced in one mode: the first sample's, in contact throughout where the model
+        has a contact slot."""
+        states = self.full_states(samples)
+        modes = np.tile(self.mode(times[0], states[0]), (times.size, 1))
+        slot = contact_mode_slot(self.system)
+        if slot is not None:
+            modes[:, slot] = 1.0
+        return states, modes
+
     def evaluate(self, times: np.ndarray, samples: np.ndarray):
         """rates (N, u) and Jacobians (N, u, u) at the unknowns ``samples`` (N, u)."""
         sys, u = self.systems, self.u
-        states = np.tile(self.problem.full_state(samples[0], self.value), (times.size, 1))
-        states[:, :u] = samples
-        mode = np.zeros(int(sys.mode_size(self.system)))
-        sys.initial_mode(self.system, float(times[0]), states[0], self.p, mode)
+        states = self.full_states(samples)
+        mode = self.mode(times[0], states[0])
         rates = np.empty_like(states)
         jacs = np.empty((times.size, self.n, self.n))
         sys.grid_values(self.system, times, states, mode, self.p, rates, jacs)
@@ -167,8 +191,7 @@ class GridModel:
         sys = self.systems
         if not self.problem.impacts:
             return []
-        states = np.tile(self.problem.full_state(samples[0], self.value), (times.size, 1))
-        states[:, :self.u] = samples
+        states = self.full_states(samples)
         out, changed = np.empty(times.size), []
         for k in range(int(sys.guard_count(self.system))):
             sign = float(sys.expected_sign(self.system, k, mode, self.p))

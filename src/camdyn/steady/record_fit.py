@@ -37,7 +37,6 @@ from camdyn.model.outputs import CHANNELS, derived
 from camdyn.params.system import System
 from camdyn.records.schema import angular_acceleration, check_consistency, check_record, record_speed, require_record
 from camdyn.steady.harmonic_balance import GridModel, HarmonicOrbit, harmonic_balance
-from camdyn.systems.traits import contact_mode_slot
 
 __all__ = ["RecordFit", "fit_record"]
 
@@ -140,12 +139,7 @@ class _Forward:
         self.evaluations += 1
         self.guess, self.orbit_harmonics, self.orbit = orbit.coefficients, orbit.harmonics, orbit
         model = GridModel(problem, problem.value)
-        states = np.tile(problem.full_state(orbit.samples[0], problem.value), (orbit.times.size, 1))
-        states[:, :problem.unknowns] = orbit.samples
-        modes = np.tile(model.evaluate(orbit.times, orbit.samples)[2], (orbit.times.size, 1))
-        slot = contact_mode_slot(problem.system_id)
-        if slot is not None:
-            modes[:, slot] = 1.0                                    # balanced in contact throughout
+        states, modes = model.balanced_modes(orbit.times, orbit.samples)
         values = derived(orbit.times, np.ascontiguousarray(states[:, :3]), modes, model.p)
         out = {}
         for name in self.channels:

@@ -329,7 +329,7 @@ def _start(problem: Problem, start: float, harmonics, guess, tolerance: float, d
     contact law: it refuses an orbit that leaves the cam)."""
     first = harmonic_balance(problem, harmonics, guess=guess, value=start, max_harmonics=max_harmonics)
     model = GridModel(problem, start)
-    mode = model.evaluate(first.times, first.samples)[2]
+    mode = model.mode(first.times[0], model.full_states(first.samples)[0])
     view = harmonic_orbit_view(problem, first, start, mode)
     if view.force_minimum < 0.0:
         raise SimulationError(f"the follower leaves the cam on the orbit at {problem.name} = {start:.6g} "

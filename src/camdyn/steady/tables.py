@@ -21,7 +21,6 @@ from camdyn.params.system import System
 from camdyn.simulation import limits
 from camdyn.steady.harmonic_balance import GridModel, HarmonicOrbit
 from camdyn.steady.response import HarmonicBranch, continue_harmonic
-from camdyn.systems.traits import contact_mode_slot
 
 __all__ = ["METHOD", "trace_harmonic", "harmonic_record", "harmonic_records"]
 
@@ -71,12 +70,7 @@ def harmonic_record(problem: Problem, orbit: Orbit, harmonic: HarmonicOrbit, cha
     record = orbit_record(replace(problem, system=None), orbit)      # no simulation: the samples give the peaks
     value = orbit.parameter
     model = GridModel(problem, value)
-    states = np.tile(problem.full_state(harmonic.samples[0], value), (harmonic.times.size, 1))
-    states[:, :problem.unknowns] = harmonic.samples
-    modes = np.tile(model.evaluate(harmonic.times, harmonic.samples)[2], (harmonic.times.size, 1))
-    slot = contact_mode_slot(problem.system_id)
-    if slot is not None:
-        modes[:, slot] = 1.0                                        # balanced in contact throughout
+    states, modes = model.balanced_modes(harmonic.times, harmonic.samples)
     spectra = channel_harmonics(problem.system_id, model.p, harmonic.times, states, modes, harmonic.harmonics,
                                 names=channels)
     if spectra is not None:
