@@ -234,13 +234,17 @@ def system_problem(system: System, key: str = "motion.speed", initial_state=None
         raise ParameterError(f"{key} has no finite value to start from")
     value = float(value)
 
+    last = {}   # the last value built: harmonic balance asks for it twice per orbit
+
     def build(value: float) -> tuple[np.ndarray, float]:
-        moved = system.with_values(**{key: value})
-        limits.check_system(moved)
-        period = moved.motion.period
-        if not (math.isfinite(period) and period > 0):
-            raise ParameterError(f"the cam must turn to have a period; {key} = {value} gives none")
-        return prepare(moved).p, period
+        if last.get("value") != value:
+            moved = system.with_values(**{key: value})
+            limits.check_system(moved)
+            period = moved.motion.period
+            if not (math.isfinite(period) and period > 0):
+                raise ParameterError(f"the cam must turn to have a period; {key} = {value} gives none")
+            last.update(value=value, p=prepare(moved).p, period=period)
+        return last["p"].copy(), last["period"]
 
     p, _ = build(value)
     prep = prepare(system)

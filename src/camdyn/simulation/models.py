@@ -16,6 +16,7 @@ from camdyn.errors import ParameterError
 from camdyn.integrator import driver as bundled
 from camdyn.integrator import instances
 from camdyn.simulation import limits
+from camdyn.simulation.datasets import dataset
 from camdyn.systems.protocol import MODEL_ID, BoundModel, adapter_source
 
 __all__ = ["simulate_model", "model_driver"]
@@ -145,5 +146,4 @@ def _dataset(bound, driver, t_out, y, modes, events, counters, elapsed, period, 
         attrs["speed_hz"] = 1.0 / period
     for q, value in zip(model.parameters, bound.values):
         attrs[f"parameter {q.name} [{q.unit}]"] = value
-    ds = xr.Dataset(data, coords={"time": ("time", t_out, {"units": "s", "long_name": "time"})}, attrs=attrs)
-    return ds
+    return dataset(data, coords={"time": ("time", t_out, {"units": "s", "long_name": "time"})}, attrs=attrs)

@@ -25,6 +25,7 @@ from camdyn.params.config import system_to_toml
 from camdyn.params.system import System
 from camdyn.params.units import parse_speed
 from camdyn.simulation import limits
+from camdyn.simulation.datasets import dataset
 from camdyn.simulation.settling import check_settled
 from camdyn.systems import registry as systems
 from camdyn.systems.protocol import BoundModel, Model
@@ -361,7 +362,7 @@ def _dataset(system, prep, t, y, modes, events, counters, elapsed, rtol, atol, m
                 data[name] = (("time",), values, {"units": unit, "long_name": long_name})
     if "impact" in wanted:
         data.update(_impact_variables(events))
-    ds = xr.Dataset(data, coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
+    ds = dataset(data, coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
     ds.attrs.update(_attributes(system, prep, counters, elapsed, rtol, atol, method))
     return ds
 

@@ -16,7 +16,7 @@ times.
 
 Grid (anti-aliasing rule): a nonlinearity of polynomial degree ``q`` maps H harmonics to
 ``qH``; the projection onto harmonics ``<= H`` is exact when ``N >= (q + 1) H + 1``. The
-default ``N`` is the power of two ``>= 8 H + 2`` (exact up to degree 7; the contact law's
+default ``N`` is ``8 H + 2`` (exact up to degree 7; the contact law's
 3/2 power and the friction law are not polynomial, so their aliasing error falls as their
 Fourier tail, which the convergence measure bounds).
 
@@ -99,8 +99,9 @@ PROBE_HARMONICS = 8
 
 
 def grid_size(harmonics: int) -> int:
-    """N: the power of two ``>= 8 H + 2`` (anti-aliasing rule ``N >= (q + 1) H + 1``, q = 7)."""
-    return 1 << int(math.ceil(math.log2(8 * harmonics + 2)))
+    """N = 8 H + 2: the anti-aliasing rule ``N >= (q + 1) H + 1`` with q = 7, made even (the
+    transforms are matrix products, so N need not be a power of two)."""
+    return 8 * harmonics + 2
 
 
 @functools.lru_cache(maxsize=16)
@@ -230,9 +231,15 @@ def harmonic_residual(model: GridModel, x: np.ndarray, harmonics: int, jacobian:
     residual = (x @ nabla.T - (project @ rates).T).ravel()        # R = nabla X - P f
     if not jacobian:
         return residual, None, times, samples, mode
-    # dR/dX[c j, d i] = nabla[j, i] delta_cd - sum_k P[j, k] J_k[c, d] E[k, i]
-    blocks = project @ (jacs.transpose(1, 2, 0)[:, :, :, None] * synth)   # (u, u, m, m): P J_cd E
-    jac = np.einsum("cd,ji->cjdi", np.eye(u), nabla) - blocks.transpose(0, 2, 1, 3)
+    # dR/dX[c j, d i] = nabla[j, i] delta_cd - sum_k P[j, k] J_k[c, d] E[k, i]; an entry J_cd
+    # that is the same at every grid time gives J_cd P E = J_cd I (P E = I for N > 2H)
+    jac = np.zeros((u, m, u, m))
+    jac[np.arange(u), :, np.arange(u), :] = nabla
+    varying = np.ptp(jacs, axis=0) != 0.0
+    rows, cols = np.nonzero(~varying & (jacs[0] != 0.0))
+    jac[rows, :, cols, :] -= jacs[0, rows, cols][:, None, None] * np.eye(m)
+    rows, cols = np.nonzero(varying)
+    jac[rows, :, cols, :] -= project @ (jacs[:, rows, cols].T[:, :, None] * synth)   # P J_cd E
     return residual, jac.reshape(u * m, u * m), times, samples, mode
 
 
