@@ -231,16 +231,21 @@ def harmonic_residual(model: GridModel, x: np.ndarray, harmonics: int, jacobian:
     residual = (x @ nabla.T - (project @ rates).T).ravel()        # R = nabla X - P f
     if not jacobian:
         return residual, None, times, samples, mode
-    # dR/dX[c j, d i] = nabla[j, i] delta_cd - sum_k P[j, k] J_k[c, d] E[k, i]; an entry J_cd
-    # that is the same at every grid time gives J_cd P E = J_cd I (P E = I for N > 2H)
-    jac = np.zeros((u, m, u, m))
-    jac[np.arange(u), :, np.arange(u), :] = nabla
-    varying = np.ptp(jacs, axis=0) != 0.0
-    rows, cols = np.nonzero(~varying & (jacs[0] != 0.0))
-    jac[rows, :, cols, :] -= jacs[0, rows, cols][:, None, None] * np.eye(m)
-    rows, cols = np.nonzero(varying)
-    jac[rows, :, cols, :] -= project @ (jacs[:, rows, cols].T[:, :, None] * synth)   # P J_cd E
-    return residual, jac.reshape(u * m, u * m), times, samples, mode
+    # dR/dX[c j, d i] = nabla[j, i] delta_cd - sum_k P[j, k] J_k[c, d] E[k, i], block by block;
+    # an entry J_cd that is the same at every grid time gives J_cd P E = J_cd I (P E = I, N > 2H)
+    jac = np.zeros((u * m, u * m))
+    first = jacs[0]
+    varying = (jacs != first).any(axis=0)
+    for c in range(u):
+        rows = slice(c * m, (c + 1) * m)
+        for d in range(u):
+            cols = slice(d * m, (d + 1) * m)
+            if varying[c, d]:
+                jac[rows, cols] = -(project @ (jacs[:, c, d][:, None] * synth))
+            elif first[c, d] != 0.0:
+                jac[rows, cols] = -first[c, d] * np.eye(m)
+        jac[rows, rows] += nabla
+    return residual, jac, times, samples, mode
 
 
 def _newton(model: GridModel, coefficients: np.ndarray, harmonics: int, tolerance: float, max_iterations: int):
