@@ -305,12 +305,17 @@ def _switch(hist, family, q, h, ratio):
     hist[NEXT_STEP, 0] = h * (min(ratio, SWITCH_GROWTH) if ratio >= THRESHOLD else 1.0)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def multistep_step(system, t, y, f, h, mode, p, hist, y1, f1, work, matrix, pivots, rtol, atol, switching):
     """One step of ``h`` [s] from ``(t, y)`` (``f`` its rates) into ``y1`` and ``f1``
     (the rates of the step's polynomial at its end, ``z_new[1] / h``), by the history's
     family; when ``switching``, an accepted step may choose the other family for the next
     (``matrix`` (n, n) and ``pivots`` (n,) hold BDF's factored matrix between steps).
+
+    Compiled on its own and called by the driver, not inlined into it: inlined, it made
+    the driver's first compile about 96 s longer (431 s against 335 s of one core for
+    the core of ``camdyn simulate``), for multistep runs 1.25-1.28 times faster, methods
+    that ``simulate`` does not offer (docs/design-notes/compiled-driver.md).
 
     Returns
     -------
