@@ -281,9 +281,12 @@ def hill_multipliers(jacobian: np.ndarray, unknowns: int, period: float) -> tupl
 
 def tail_measure(x: np.ndarray, harmonics: int) -> float:
     """The convergence measure of coefficients ``x`` (u, 2H + 1) [-]: the largest amplitude of
-    the harmonics ``k > 3H/4`` over the largest amplitude of harmonics ``k >= 1``."""
+    the harmonics ``k > 3H/4``, and at least of the top two, over the largest amplitude of
+    harmonics ``k >= 1``. (Two at least: a symmetric nonlinearity, a cubic spring's,
+    makes every even harmonic zero, so the top one alone would say H = 2 or 4 is enough
+    where the third harmonic is not small.)"""
     amp = np.hypot(x[:, 1::2], x[:, 2::2])
-    top = amp[:, int(math.floor(0.75 * harmonics)):]              # harmonics k > 3H/4
+    top = amp[:, min(int(math.floor(0.75 * harmonics)), max(harmonics - 2, 0)):]   # k > 3H/4, k >= H - 1
     largest = float(np.max(amp))
     return float(np.max(top)) / largest if largest > 0 else 0.0
 
