@@ -9,12 +9,11 @@ stiffness per unit mass and F [m/s^2] the forcing per unit mass. With w0 = 2 pi 
 gamma = w0^2, F = 0.1 w0^2 (the defaults) the response over 0.8-1.6 Hz bends to the right
 and folds twice. Use it as
 
-    import camdyn
     from camdyn.continuation.problem import bound_problem
+    from camdyn.steady import continue_harmonic
     from duffing import DUFFING
 
-    curve = camdyn.steady.continue_harmonic(bound_problem(DUFFING.bind({})), 0.8, 1.6,
-                                             max_step=0.5, max_points=4000)
+    curve = continue_harmonic(bound_problem(DUFFING.bind({})), 0.8, 1.6, max_step=0.5, max_points=4000)
 """
 
 import math
