@@ -33,8 +33,9 @@ JsonOption = typer.Option(False, "--json", help="Print JSON on standard output (
                                                 "messages go to standard error.")
 ForceOption = typer.Option(False, "--force", help="Overwrite output files that already exist.")
 
-#: The first compile of the core took 387 s on the 2-core development machine
-#: (benchmarks/bench_first_run.py).
+#: The first compile of the core took 342 s on the 2-core development machine
+#: (``camdyn compile`` on an empty cache, 2026-11-29; 387 s in benchmarks/bench_first_run.py
+#: before the multistep step was compiled apart from the driver).
 COMPILE_NOTICE = ("compiling camdyn's core for this machine, once (about 6 minutes on 2 cores; "
                   "'camdyn compile' does it ahead)...")
 #: Modules whose compiled functions are the core: compiling any of them is the long wait.
