@@ -63,9 +63,10 @@ class HarmonicOrbit:
     iterations : int
         Newton iterations taken.
     tail : float
-        Convergence measure [-]: the largest amplitude ``sqrt(a_k^2 + b_k^2)`` of the top
-        harmonics ``k > 3H/4`` over the largest amplitude of harmonics ``k >= 1``, taken
-        over the components, each in its own unit.
+        Convergence measure [-] (:func:`tail_measure`): the largest amplitude
+        ``sqrt(a_k^2 + b_k^2)`` of the top harmonics ``k > 3H/4``, and of the top two at
+        least, over the largest amplitude of harmonics ``k >= 1``, taken over the
+        components, each in its own unit (1 at H <= 2, 0 at H = 0).
     multipliers : ndarray (n,)
         Floquet multipliers by Hill's method [-], largest magnitude first.
     exponents : ndarray (n,)
@@ -285,6 +286,8 @@ def tail_measure(x: np.ndarray, harmonics: int) -> float:
     harmonics ``k >= 1``. (Two at least: a symmetric nonlinearity, a cubic spring's,
     makes every even harmonic zero, so the top one alone would say H = 2 or 4 is enough
     where the third harmonic is not small.)"""
+    if harmonics == 0:
+        return 0.0
     amp = np.hypot(x[:, 1::2], x[:, 2::2])
     top = amp[:, min(int(math.floor(0.75 * harmonics)), max(harmonics - 2, 0)):]   # k > 3H/4, k >= H - 1
     largest = float(np.max(amp))
@@ -315,14 +318,15 @@ def _guess(model: GridModel, harmonics: int, guess) -> np.ndarray:
 
 
 def _first_harmonics(model: GridModel, guess, tail_tolerance: float) -> tuple[int, np.ndarray]:
-    """``"auto"``'s first H and guess: H = 2 from a given or constant guess; from the
-    problem's orbit guess, the smallest of 2, 4, 8 whose tail (:func:`tail_measure`)
+    """``"auto"``'s first H and guess: H = 4 from a given or constant guess (at H = 2
+    the tail, read from the top two harmonics, is always 1); from the problem's orbit
+    guess, the smallest of 4 and 8 whose tail (:func:`tail_measure`)
     the guess already meets (the guess's spectrum says how many harmonics the orbit needs,
     which spares Newton the solves at the smaller H)."""
     if guess is not None or model.problem.orbit_guess is None:
-        return 2, _guess(model, 2, guess)
+        return 4, _guess(model, 4, guess)
     x = _guess(model, PROBE_HARMONICS, None)
-    h = 2
+    h = 4
     while h < PROBE_HARMONICS and tail_measure(resize(x, h), h) > tail_tolerance:
         h *= 2
     return h, resize(x, h)
@@ -336,7 +340,7 @@ def harmonic_balance(problem: Problem, harmonics: int | str = "auto", guess=None
     Parameters
     ----------
     harmonics : int or "auto"
-        H. "auto": H = 2, 4, 8, ... until the convergence measure ``tail`` is below
+        H. "auto": H = 4, 8, 16, ... until the convergence measure ``tail`` is below
         ``tail_tolerance`` [-] (each solve starts from the last).
     guess : array or None
         Coefficients (n, 2H'+1) (any H', padded or cut) or a constant state (n,); None:

@@ -239,11 +239,12 @@ def _tests(point: _Point) -> dict[str, float]:
 
 def _locate(curve: _Curve, a: _Point, b: _Point, kind: str) -> _Point | None:
     """The point between ``a`` and ``b`` where the test function ``kind`` is zero
-    (:func:`_secant`); a fold's or a contact loss's iterates skip Hill's eigenvalues, which
-    only the located point gets. A contact loss is corrected again at its parameter; a
-    fold is not (there the orbit's Jacobian at a fixed parameter is singular: such a
-    correction does not converge), it keeps the secant's last point, corrected on the
-    plane across the tangent."""
+    (:func:`_secant`). A contact loss's iterates skip Hill's eigenvalues, and the located
+    point, corrected again at its parameter, gets them. A fold is not corrected at its
+    parameter (there the orbit's Jacobian at a fixed parameter is singular: such a
+    correction does not converge): it is the secant's last point, corrected on the plane
+    across the tangent, so its iterates compute Hill's eigenvalues (each about 0.2 ms at
+    H = 8)."""
     hill = kind in ("period-doubling", "neimark-sacker")
     c = _secant(curve, a, b, kind, hill or kind == "fold")
     if c is None or hill or kind == "fold":
