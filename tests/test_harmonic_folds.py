@@ -6,9 +6,7 @@ symmetric nonlinearity's zero even harmonics must not fool."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +16,7 @@ from scipy.optimize import brentq
 
 from camdyn.continuation.problem import bound_problem
 from camdyn.steady import continue_harmonic, harmonic_balance
+from camdyn.systems.model_files import load_model
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "models" / "duffing.py"
 # the example's defaults, in the nondimensional form x'' + 2 zeta x' + x + g x^3 = F cos(W tau)
@@ -27,11 +26,7 @@ W0, ZETA, G, F = 2.0 * math.pi, 0.05, 1.0, 0.1
 
 @pytest.fixture(scope="module")
 def problem():
-    spec = importlib.util.spec_from_file_location("duffing", EXAMPLE)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["duffing"] = module
-    spec.loader.exec_module(module)
-    return bound_problem(module.DUFFING.bind({}))
+    return bound_problem(load_model(f"{EXAMPLE}:DUFFING").bind({}))
 
 
 def one_harmonic_folds() -> list[float]:

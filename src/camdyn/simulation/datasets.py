@@ -20,7 +20,7 @@ def _variable(spec):
     """An ``xarray.Variable`` of ``spec`` = ``(dims, data, attrs)``, as it is when ``data``
     is a numeric NumPy array; otherwise ``spec`` unchanged, for xarray to check."""
     dims, data, *attrs = spec
-    if isinstance(data, np.ndarray) and type(data) is np.ndarray and data.dtype.kind in "biuf":
+    if type(data) is np.ndarray and data.dtype.kind in "biuf":   # not a subclass (masked)
         dims = (dims,) if isinstance(dims, str) else tuple(dims)
         return xr.Variable(dims, data, attrs[0] if attrs else None, fastpath=True)
     return spec

@@ -245,9 +245,10 @@ def _locate(curve: _Curve, a: _Point, b: _Point, kind: str) -> _Point | None:
     correction does not converge): it is the secant's last point, corrected on the plane
     across the tangent, so its iterates compute Hill's eigenvalues (each about 0.2 ms at
     H = 8)."""
-    hill = kind in ("period-doubling", "neimark-sacker")
-    c = _secant(curve, a, b, kind, hill or kind == "fold")
-    if c is None or hill or kind == "fold":
+    if kind != "contact-loss":
+        return _secant(curve, a, b, kind, hill=True)
+    c = _secant(curve, a, b, kind, hill=False)
+    if c is None:
         return c
     axis = np.zeros(c.z.size)
     axis[-1] = 1.0
@@ -333,7 +334,7 @@ def _start(problem: Problem, start: float, harmonics, guess, tolerance: float, d
     contact law: it refuses an orbit that leaves the cam)."""
     first = harmonic_balance(problem, harmonics, guess=guess, value=start, max_harmonics=max_harmonics)
     model = GridModel(problem, start)
-    mode = model.mode(first.times[0], model.full_states(first.samples)[0])
+    mode = model.mode(first.times[0], model.full_states(first.samples[:1])[0])
     view = harmonic_orbit_view(problem, first, start, mode)
     if view.force_minimum < 0.0:
         raise SimulationError(f"the follower leaves the cam on the orbit at {problem.name} = {start:.6g} "
